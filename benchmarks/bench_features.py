@@ -1,0 +1,68 @@
+"""Feature-core cost per audio frame and real-time factor (one core).
+
+Streams a synthetic recording through StreamingFeatureExtractor the way the node receives it
+(audio in 10 ms chunks, one wrench sample per message) and the way offline tools do (1 s
+chunks), at 16/44.1 kHz audio with 100 Hz/1 kHz F/T. Prints a markdown table of medians.
+
+    python benchmarks/bench_features.py [--seconds 30] [--repeats 5]
+"""
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from contact_detector.cli.features import synthetic_recording
+from contact_detector.features import FeatureConfig, StreamingFeatureExtractor
+
+
+def run_once(*, config, recording, audio_rate, ft_rate, audio_chunk, ft_chunk):
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate,
+                                          ft_input_rate=ft_rate)
+    audio, ft_t, force, torque = (recording['audio'], recording['ft_t'], recording['force'],
+                                  recording['torque'])
+    t0 = recording['t0']
+    frames, f = 0, 0
+    start = time.perf_counter()
+    for a in range(0, audio.size, audio_chunk):
+        end = min(a + audio_chunk, audio.size)
+        stamp = t0 + (end - 1) / audio_rate
+        f_end = int(np.searchsorted(ft_t, stamp, side='right'))
+        while f < f_end:
+            g = min(f + ft_chunk, f_end)
+            frames += len(extractor.push_wrench(t=ft_t[f:g], force=force[f:g],
+                                                torque=torque[f:g]))
+            f = g
+        frames += len(extractor.push_audio(audio[a:end], stamp=stamp))
+    frames += len(extractor.flush())
+    return time.perf_counter() - start, frames
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument('--seconds', type=float, default=30.0)
+    parser.add_argument('--repeats', type=int, default=5)
+    args = parser.parse_args()
+    config = FeatureConfig()
+    print(f'feature core, {args.seconds:.0f} s of input, median of {args.repeats} runs\n')
+    print('| audio | F/T | delivery | us / audio frame | real-time factor |')
+    print('|---|---|---|---|---|')
+    for audio_rate in (16000, 44100):
+        for ft_rate in (100.0, 1000.0):
+            recording = synthetic_recording(audio_rate=audio_rate, ft_rate=ft_rate,
+                                            seconds=args.seconds)
+            for label, audio_chunk, ft_chunk in (
+                    ('live: 10 ms audio, 1 wrench/msg', audio_rate // 100, 1),
+                    ('offline: 1 s chunks', audio_rate, int(ft_rate))):
+                runs = [run_once(config=config, recording=recording, audio_rate=audio_rate,
+                                 ft_rate=ft_rate, audio_chunk=audio_chunk, ft_chunk=ft_chunk)
+                        for _ in range(args.repeats)]
+                seconds = statistics.median(r[0] for r in runs)
+                frames = runs[0][1]
+                print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {label} | '
+                      f'{1e6 * seconds / frames:.1f} | {args.seconds / seconds:.0f}x |')
+
+
+if __name__ == '__main__':
+    main()

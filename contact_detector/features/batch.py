@@ -1,0 +1,194 @@
+"""Straightforward batch reference of the feature core.
+
+Written for clarity, with plain loops over frames, from whole recordings. The streaming code
+(:mod:`contact_detector.features.streaming`) must give the same numbers for any chunking; the
+tests compare the two. Offline tools may use it for plots, never for training or detection
+(they run the streaming code, exactly as the node does).
+"""
+
+from typing import Optional
+
+import numpy as np
+
+from contact_detector.features import spectral
+from contact_detector.features.config import FeatureConfig
+from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
+
+
+def batch_audio_power(*, config: FeatureConfig, audio: np.ndarray, audio_rate: float,
+                      audio_t0: float) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Audio power of every complete frame of a recording.
+
+    Frame i covers samples ``[e_i - W_L, e_i)`` with ``e_i = W_L + floor(i * hop_s * Fs + 0.5)``
+    and ends at ``audio_t0 + (e_i - 1) / Fs``.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        Frame and hop durations.
+    audio : np.ndarray, shape (m,)
+        int16 or float samples.
+    audio_rate : float
+        Hz.
+    audio_t0 : float
+        Time of sample 0, seconds.
+
+    Returns
+    -------
+    t, power : np.ndarray, shape (n_frames,)
+
+    """
+    x = np.asarray(audio)
+    x = x.astype(np.float64) / 32768.0 if x.dtype == np.int16 else x.astype(np.float64)
+    w = config.audio_frame_samples(audio_rate)
+    hop = config.audio_hop_s * audio_rate
+    times, power = [], []
+    i = 0
+    while True:
+        end = w + int(np.floor(i * hop + 0.5))
+        if end > x.size:
+            break
+        frame = x[end - w:end]
+        power.append(float(np.sum(frame * frame)) / w)
+        times.append(audio_t0 + (end - 1) / audio_rate)
+        i += 1
+    return np.array(times), np.array(power)
+
+
+def batch_noise_floor(*, config: FeatureConfig, power: np.ndarray) -> np.ndarray:
+    """Noise floor ``F_i = min(P_i, F_{i-1} exp(hop/tau))``, ``F_{-1} = inf``, shape (n,)."""
+    growth = np.exp(config.audio_hop_s / config.noise_floor_tau_s)
+    floor = np.empty_like(power)
+    previous = np.inf
+    for i, p in enumerate(power):
+        previous = min(p, previous * growth)
+        floor[i] = previous
+    return floor
+
+
+def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndarray,
+                      torque: np.ndarray,
+                      ft_input_rate: Optional[float] = None) -> tuple[np.ndarray, np.ndarray,
+                                                                      tuple]:
+    """
+    F/T spectral features of a whole, gap-free recording.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        The feature contract.
+    ft_t : np.ndarray, shape (n,)
+        Stamps, seconds.
+    force, torque : np.ndarray, shape (n, 3)
+        N and N m.
+    ft_input_rate : float or None
+        Input rate; decimated by block means to ``config.ft_rate_hz``.
+
+    Returns
+    -------
+    t : np.ndarray, shape (m,)
+        Time of each feature frame's last sample.
+    x : np.ndarray, shape (m, n_columns)
+    columns : tuple of str
+
+    """
+    m = int(round((ft_input_rate or config.ft_rate_hz) / config.ft_rate_hz))
+    n_blocks = len(ft_t) // m
+    dec_t = np.array([ft_t[b * m + m - 1] for b in range(n_blocks)])
+    values = np.concatenate([force, torque], axis=1).astype(np.float64)
+    dec = np.array([values[b * m:(b + 1) * m].mean(axis=0) for b in range(n_blocks)])
+    if n_blocks == 0:
+        dec = np.zeros((0, 6))
+    mags = [np.linalg.norm(dec[:, :3], axis=1), np.linalg.norm(dec[:, 3:], axis=1)]
+    deltas = [name for name in config.extra_features if name.endswith('_delta')]
+    n = config.ft_window
+    need = max(n, config.delta_lag + config.delta_window) if deltas else n
+    columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
+    rows, times = [], []
+    previous = [None, None]
+    for end in range(need - 1, n_blocks, config.ft_hop):
+        row = []
+        delta_row = []
+        for s, signal in enumerate(mags):
+            frame = signal[end - n + 1:end + 1][None, :]
+            spectrum = spectral.magnitude_spectrum(frames=frame, window_fn=config.ft_window_fn,
+                                                   detrend=config.ft_detrend)
+            centroid, spread = spectral.spectral_centroid_spread(spectra=spectrum,
+                                                                 window_length=n)
+            en = spectral.sum_normalised(spectra=spectrum)
+            prev = en if previous[s] is None else previous[s]
+            flux = spectral.spectral_flux(normalised=en, previous=prev)
+            previous[s] = en
+            row += [centroid[0], spread[0], flux[0]]
+            name = ('force_delta', 'torque_delta')[s]
+            if name in deltas:
+                w, lag = config.delta_window, config.delta_lag
+                new = signal[end - w + 1:end + 1].mean()
+                old = signal[end - lag - w + 1:end - lag + 1].mean()
+                delta_row.append(new - old)
+        rows.append(row + delta_row)
+        times.append(dec_t[end])
+    x = np.array(rows) if rows else np.zeros((0, len(columns)))
+    return np.array(times), x, columns
+
+
+def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: float,
+                   audio_t0: float, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
+                   ft_input_rate: Optional[float] = None,
+                   max_ft_age_s: Optional[float] = None) -> FeatureFrames:
+    """
+    Per-audio-frame feature vectors of a whole recording (reference implementation).
+
+    Each audio frame ending at ``t_a`` takes the newest F/T feature frame ending at or before
+    ``t_a``; the row is invalid (zeros in the F/T columns) if there is none or it is older than
+    ``max_ft_age_s`` (default ``ft_hop / ft_rate_hz + 0.05``).
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        The feature contract.
+    audio : np.ndarray, shape (m,)
+        int16 or float mono samples.
+    audio_rate : float
+        Hz.
+    audio_t0 : float
+        Time of audio sample 0, seconds.
+    ft_t : np.ndarray, shape (n,)
+        Wrench stamps, seconds.
+    force, torque : np.ndarray, shape (n, 3)
+        N and N m.
+    ft_input_rate : float or None
+        Wrench rate, Hz (default ``config.ft_rate_hz``).
+    max_ft_age_s : float or None
+        Freshness limit, seconds.
+
+    Returns
+    -------
+    FeatureFrames
+
+    """
+    names = config.feature_names
+    t_a, power = batch_audio_power(config=config, audio=audio, audio_rate=audio_rate,
+                                   audio_t0=audio_t0)
+    ft_times, ft_x, columns = batch_ft_features(config=config, ft_t=np.asarray(ft_t),
+                                                force=np.asarray(force),
+                                                torque=np.asarray(torque),
+                                                ft_input_rate=ft_input_rate)
+    age = config.ft_hop / config.ft_rate_hz + 0.05 if max_ft_age_s is None else max_ft_age_s
+    x = np.zeros((t_a.size, len(names)))
+    valid = np.zeros(t_a.size, dtype=bool)
+    rel = None
+    if 'audio_power_rel_db' in names:
+        rel = spectral.power_db_above_floor(power=power,
+                                            floor=batch_noise_floor(config=config, power=power))
+    for i, t in enumerate(t_a):
+        x[i, 0] = power[i]
+        if rel is not None:
+            x[i, names.index('audio_power_rel_db')] = rel[i]
+        before = np.flatnonzero(ft_times <= t)
+        if before.size and t - ft_times[before[-1]] <= age:
+            valid[i] = True
+            for j, name in enumerate(columns):
+                x[i, names.index(name)] = ft_x[before[-1], j]
+    return FeatureFrames(t=t_a, x=x, valid=valid, names=names)

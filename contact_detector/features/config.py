@@ -1,0 +1,150 @@
+"""Feature configuration: the contract between the feature core, the model file and the node.
+
+A :class:`FeatureConfig` fully determines the feature vector computed for every audio frame.
+It is stored inside every model bundle; loading a model refuses a configuration that differs
+from the one the running code would use (see :mod:`contact_detector.model.bundle`).
+"""
+
+from dataclasses import asdict, dataclass, fields
+import math
+from typing import Any, Mapping
+
+from contact_detector.errors import ConfigError
+
+#: Bump when the meaning of any feature changes (formula, bins, normalisation, alignment).
+FEATURE_SCHEMA_VERSION = 1
+
+#: The paper's seven features, in the order they appear in every feature vector.
+PAPER_FEATURES = (
+    'audio_power',
+    'force_centroid',
+    'force_spread',
+    'force_flux',
+    'torque_centroid',
+    'torque_spread',
+    'torque_flux',
+)
+
+#: Extra features beyond the paper, enabled by :attr:`FeatureConfig.extra_features`.
+#: ``*_delta`` is the change of the F/T magnitude (mean of the newest ``delta_window`` samples
+#: minus the mean of the ``delta_window`` samples ending ``delta_lag`` F/T samples earlier),
+#: in N or N m; ``audio_power_rel_db`` is the audio power in dB above the tracked noise floor.
+EXTRA_FEATURES = (
+    'audio_power_rel_db',
+    'force_delta',
+    'torque_delta',
+)
+
+WINDOW_FUNCTIONS = ('rect', 'hann')
+DETREND_MODES = ('none', 'mean')
+
+
+@dataclass(frozen=True)
+class FeatureConfig:
+    """
+    Everything that defines the per-audio-frame feature vector.
+
+    Attributes
+    ----------
+    audio_frame_s : float
+        Audio frame length in seconds. HARK's default 512 samples at 16 kHz = 0.032 s.
+    audio_hop_s : float
+        Audio hop in seconds. HARK's default 160 samples at 16 kHz = 0.010 s (100 frames/s).
+    ft_rate_hz : float
+        Rate in Hz at which F/T features are computed. Input at an integer multiple of it is
+        block-averaged down (e.g. 1 kHz -> 100 Hz) so the features keep their meaning.
+    ft_window : int
+        DFT window length W_fL in F/T samples (at ``ft_rate_hz``). The paper uses 160.
+    ft_hop : int
+        F/T feature hop in samples. The paper uses 128; 1 updates at every F/T sample.
+    ft_window_fn : str
+        'rect' (no window, as pyAudioAnalysis and the paper) or 'hann'.
+    ft_detrend : str
+        'none' (the paper) or 'mean': subtract each window's mean before the DFT, so that the
+        features do not depend on the static load (the object's weight).
+    extra_features : tuple of str
+        Names from :data:`EXTRA_FEATURES` appended after the paper's seven, in this order.
+    delta_window : int
+        F/T samples averaged on each side of a ``*_delta`` feature.
+    delta_lag : int
+        Distance in F/T samples between the two averages of a ``*_delta`` feature.
+    noise_floor_tau_s : float
+        Time constant in seconds with which the audio noise floor rises (it falls at once).
+
+    """
+
+    audio_frame_s: float = 0.032
+    audio_hop_s: float = 0.010
+    ft_rate_hz: float = 100.0
+    ft_window: int = 32
+    ft_hop: int = 1
+    ft_window_fn: str = 'rect'
+    ft_detrend: str = 'none'
+    extra_features: tuple = ()
+    delta_window: int = 3
+    delta_lag: int = 10
+    noise_floor_tau_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        """Validate every field; raise :class:`ConfigError` naming the bad one."""
+        object.__setattr__(self, 'extra_features', tuple(self.extra_features))
+        positive = ('audio_frame_s', 'audio_hop_s', 'ft_rate_hz', 'noise_floor_tau_s')
+        for name in positive:
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ConfigError(f'FeatureConfig.{name} must be a finite number > 0, '
+                                  f'got {value!r}')
+        for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
+                          ('delta_lag', 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')
+        if self.audio_hop_s > self.audio_frame_s:
+            raise ConfigError('FeatureConfig.audio_hop_s must not exceed audio_frame_s '
+                              f'({self.audio_hop_s} > {self.audio_frame_s})')
+        if self.ft_window_fn not in WINDOW_FUNCTIONS:
+            raise ConfigError(f'FeatureConfig.ft_window_fn must be one of {WINDOW_FUNCTIONS}, '
+                              f'got {self.ft_window_fn!r}')
+        if self.ft_detrend not in DETREND_MODES:
+            raise ConfigError(f'FeatureConfig.ft_detrend must be one of {DETREND_MODES}, '
+                              f'got {self.ft_detrend!r}')
+        unknown = [n for n in self.extra_features if n not in EXTRA_FEATURES]
+        if unknown or len(set(self.extra_features)) != len(self.extra_features):
+            raise ConfigError(f'FeatureConfig.extra_features must be distinct names from '
+                              f'{EXTRA_FEATURES}, got {self.extra_features!r}')
+
+    @property
+    def feature_names(self) -> tuple:
+        """Names of the feature vector's columns, in order."""
+        return PAPER_FEATURES + self.extra_features
+
+    @property
+    def n_features(self) -> int:
+        """Length of the feature vector."""
+        return len(self.feature_names)
+
+    def audio_frame_samples(self, sample_rate: float) -> int:
+        """
+        Audio frame length W_L in samples at ``sample_rate``: ``round(audio_frame_s * rate)``.
+
+        16 kHz -> 512, 44.1 kHz -> 1411, 48 kHz -> 1536 with the default 32 ms.
+        """
+        return max(1, int(math.floor(self.audio_frame_s * sample_rate + 0.5)))
+
+    def to_dict(self) -> dict:
+        """Plain-JSON form, stored in model bundles and cards."""
+        data = asdict(self)
+        data['extra_features'] = list(self.extra_features)
+        return data
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> 'FeatureConfig':
+        """Inverse of :meth:`to_dict`; unknown keys are a :class:`ConfigError`."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ConfigError(f'unknown FeatureConfig keys: {unknown}')
+        try:
+            return cls(**dict(data))
+        except TypeError as err:
+            raise ConfigError(f'invalid FeatureConfig: {err}') from err

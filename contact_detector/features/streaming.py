@@ -1,0 +1,661 @@
+"""Streaming feature core: ring buffers, time anchoring and causal alignment.
+
+Three small stateful classes, each with ``reset()``:
+
+* :class:`AudioFramer` cuts the audio stream into frames of ``audio_frame_s`` every
+  ``audio_hop_s`` and gives each frame the time of its last sample;
+* :class:`ForceTorqueStream` turns wrench samples into the F/T spectral features at
+  ``ft_rate_hz``, one feature frame every ``ft_hop`` samples;
+* :class:`StreamingFeatureExtractor` joins them: every audio frame gets the newest F/T feature
+  frame whose window ends at or before the audio frame's end time (no interpolation, nothing
+  from the future) and comes out as one row of the feature matrix.
+
+Chunks of any size are accepted (one sample to many seconds); the work per chunk is vectorised,
+memory is bounded by the window lengths and ``history_s``. Time is always passed in (header
+stamps, bag log times); nothing here reads a clock. The batch reference in
+:mod:`contact_detector.features.batch` computes the same numbers without any streaming logic.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Optional, Sequence
+
+import numpy as np
+
+from contact_detector.errors import ConfigError, InputError
+from contact_detector.features import spectral
+from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
+
+#: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
+FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
+
+
+class TimeJumpError(InputError):
+    """Stamps jumped backwards by more than the tolerance (e.g. a bag loop)."""
+
+
+@dataclass(frozen=True)
+class FeatureFrames:
+    """
+    A block of per-audio-frame feature vectors.
+
+    Attributes
+    ----------
+    t : np.ndarray, shape (n,)
+        End time of each audio frame (time of its last sample), seconds.
+    x : np.ndarray, shape (n, n_features)
+        Feature vectors, columns in the order of ``names``.
+    valid : np.ndarray, shape (n,), bool
+        True where fresh F/T features were available for the frame. Invalid rows carry zeros in
+        the F/T columns and must never lead to a release.
+    names : tuple of str
+        Column names.
+
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    valid: np.ndarray
+    names: tuple
+
+    def __len__(self) -> int:
+        """Return the number of frames."""
+        return int(self.t.shape[0])
+
+    @classmethod
+    def empty(cls, names: Sequence[str]) -> 'FeatureFrames':
+        """Return a block with no frames."""
+        return cls(t=np.zeros(0), x=np.zeros((0, len(names))), valid=np.zeros(0, dtype=bool),
+                   names=tuple(names))
+
+    @classmethod
+    def concat(cls, blocks: Sequence['FeatureFrames'], names: Sequence[str]) -> 'FeatureFrames':
+        """Concatenate blocks in order."""
+        blocks = [b for b in blocks if len(b)]
+        if not blocks:
+            return cls.empty(names)
+        return cls(t=np.concatenate([b.t for b in blocks]),
+                   x=np.concatenate([b.x for b in blocks]),
+                   valid=np.concatenate([b.valid for b in blocks]), names=tuple(names))
+
+
+def to_unit_audio(samples: np.ndarray) -> np.ndarray:
+    """
+    Validate an audio chunk and scale it to float64 in [-1, 1].
+
+    Parameters
+    ----------
+    samples : np.ndarray, shape (n,)
+        int16 (divided by 32768) or float (taken as already in [-1, 1]).
+
+    Returns
+    -------
+    np.ndarray, shape (n,), float64
+
+    Raises
+    ------
+    InputError
+        Wrong dimensionality or dtype, or a NaN/Inf sample.
+
+    """
+    arr = np.asarray(samples)
+    if arr.ndim != 1:
+        raise InputError(f'audio chunk must be 1-D (mono), got shape {arr.shape}')
+    if arr.dtype == np.int16:
+        return arr.astype(np.float64) / 32768.0
+    if arr.dtype.kind != 'f':
+        raise InputError(f'audio chunk must be int16 or float, got dtype {arr.dtype}')
+    out = arr.astype(np.float64)
+    if not np.all(np.isfinite(out)):
+        raise InputError('audio chunk contains NaN or Inf')
+    return out
+
+
+def frame_ends(*, first: int, count: int, frame_length: int, hop: float) -> np.ndarray:
+    """
+    Exclusive end sample index of audio frames ``first .. first+count-1``.
+
+    ``e_i = W_L + floor(i * hop + 0.5)`` with ``hop = audio_hop_s * Fs`` (not necessarily an
+    integer): frames keep exact time spacing at any sample rate, the hop in samples alternating
+    between floor and ceil where ``hop`` is fractional.
+    """
+    i = np.arange(first, first + count, dtype=np.float64)
+    return frame_length + np.floor(i * hop + 0.5).astype(np.int64)
+
+
+class AudioFramer:
+    """
+    Cut an audio stream into power frames with times anchored on chunk stamps.
+
+    Sample n (counted from the last reset) is at ``anchor + n / Fs``. Each chunk's stamp is the
+    time of its last sample plus a non-negative transport delay, so the anchor is the smallest
+    ``stamp - (n_last / Fs)`` seen, allowed to creep up by ``drift`` seconds per second to follow
+    a sound card clock that runs slow. A chunk later than ``gap_tolerance_s`` against the sample
+    count means samples were lost: the stream restarts there.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        Frame and hop durations.
+    sample_rate : float
+        Audio sample rate in Hz.
+    gap_tolerance_s : float
+        Largest accepted lateness of a chunk stamp before a restart, seconds.
+    backjump_tolerance_s : float
+        Largest accepted earliness of a chunk stamp before :class:`TimeJumpError`, seconds.
+    drift : float
+        Rate at which the anchor may creep upwards, seconds per second.
+
+    """
+
+    def __init__(self, *, config: FeatureConfig, sample_rate: float,
+                 gap_tolerance_s: float = 0.2, backjump_tolerance_s: float = 0.5,
+                 drift: float = 5e-4) -> None:
+        if not (isinstance(sample_rate, (int, float)) and math.isfinite(sample_rate)
+                and 1000.0 <= sample_rate <= 384000.0):
+            raise ConfigError(f'audio sample rate must be in [1000, 384000] Hz, got {sample_rate}')
+        self.sample_rate = float(sample_rate)
+        self.frame_length = config.audio_frame_samples(self.sample_rate)
+        self.hop = config.audio_hop_s * self.sample_rate
+        if self.hop < 1.0:
+            raise ConfigError(f'audio hop {config.audio_hop_s} s is shorter than one sample at '
+                              f'{sample_rate} Hz')
+        self._offsets = np.arange(self.frame_length)
+        self.gap_tolerance_s = gap_tolerance_s
+        self.backjump_tolerance_s = backjump_tolerance_s
+        self.drift = drift
+        self.restarts = 0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all samples and the time anchor."""
+        self._anchor: Optional[float] = None
+        self._last_stamp: Optional[float] = None
+        self._n_total = 0          # samples received since the reset
+        self._next_frame = 0       # index of the next frame to complete
+        self._buf = np.zeros(0)    # samples from index self._buf_start on
+        self._buf_start = 0
+
+    @property
+    def latest_time(self) -> Optional[float]:
+        """Time of the newest received sample, or None before the first chunk."""
+        if self._anchor is None:
+            return None
+        return self._anchor + (self._n_total - 1) / self.sample_rate
+
+    def _update_anchor(self, n: int, stamp: float) -> None:
+        offset = stamp - (self._n_total + n - 1) / self.sample_rate
+        if self._anchor is None:
+            self._anchor = offset
+        else:
+            crept = self._anchor + self.drift * max(0.0, stamp - self._last_stamp)
+            if offset < crept - self.backjump_tolerance_s:
+                raise TimeJumpError(f'audio stamp {stamp:.6f} is '
+                                    f'{crept - offset:.3f} s earlier than the sample count '
+                                    'allows (time jumped backwards)')
+            if offset > crept + self.gap_tolerance_s:
+                # Samples were lost: start a new stream at this chunk.
+                self.restarts += 1
+                self.reset()
+                self._anchor = stamp - (n - 1) / self.sample_rate
+            else:
+                self._anchor = min(crept, offset)
+        self._last_stamp = stamp
+
+    def push(self, samples: np.ndarray, *,
+             stamp: Optional[float] = None) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Add a chunk; return the frames it completes.
+
+        Parameters
+        ----------
+        samples : np.ndarray, shape (n,)
+            float64 samples in [-1, 1] (see :func:`to_unit_audio`).
+        stamp : float or None
+            Time of the chunk's last sample, seconds. None continues the sample count (only
+            after a first stamped chunk).
+
+        Returns
+        -------
+        t, power : np.ndarray, shape (n_frames,)
+            End time of each completed frame (its last sample) and its power (eq. 1).
+
+        """
+        n = int(samples.shape[0])
+        if n == 0:
+            return np.zeros(0), np.zeros(0)
+        if stamp is None:
+            if self._anchor is None:
+                raise InputError('the first audio chunk after a reset needs a stamp')
+        else:
+            self._update_anchor(n, float(stamp))
+        self._buf = np.concatenate([self._buf, samples]) if self._buf.size else samples
+        self._n_total += n
+        w = self.frame_length
+        # Frames i with e_i <= n_total: i <= (n_total - w + 0.5) / hop, checked exactly below.
+        upper = int(math.floor((self._n_total - w + 0.5) / self.hop)) + 2 - self._next_frame
+        if upper > 0:
+            ends = frame_ends(first=self._next_frame, count=upper, frame_length=w, hop=self.hop)
+            ends = ends[ends <= self._n_total]
+        else:
+            ends = np.zeros(0, dtype=np.int64)
+        if ends.size:
+            starts = ends - w - self._buf_start
+            windows = self._buf[starts[:, None] + self._offsets]
+            power = spectral.audio_power(frames=windows)
+            t = self._anchor + (ends - 1) / self.sample_rate
+            self._next_frame += ends.size
+        else:
+            power, t = np.zeros(0), np.zeros(0)
+        next_start = int(frame_ends(first=self._next_frame, count=1, frame_length=w,
+                                    hop=self.hop)[0]) - w
+        keep_from = min(max(next_start, self._buf_start), self._n_total)
+        self._buf = self._buf[keep_from - self._buf_start:]
+        self._buf_start = keep_from
+        return t, power
+
+
+class NoiseFloor:
+    """
+    Track the audio noise floor: falls at once to a quieter frame, rises by ``exp(hop/tau)``.
+
+    ``F_i = min(P_i, F_{i-1} * g)`` with ``g = exp(audio_hop_s / noise_floor_tau_s)``.
+    """
+
+    def __init__(self, *, config: FeatureConfig) -> None:
+        self.growth = math.exp(config.audio_hop_s / config.noise_floor_tau_s)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the floor."""
+        self._floor = math.inf
+
+    def update(self, power: np.ndarray) -> np.ndarray:
+        """
+        Return the floor after each frame, shape like ``power``.
+
+        Vectorised per block of 256 frames as ``g^k min(F_prev g, min_{j<=k} P_j g^-j)``.
+        """
+        out = np.empty_like(power)
+        for lo in range(0, power.shape[0], 256):
+            block = power[lo:lo + 256]
+            k = np.arange(block.shape[0], dtype=np.float64)
+            gk = self.growth ** k
+            running = np.minimum.accumulate(block / gk)
+            out[lo:lo + 256] = np.minimum(gk * running, self._floor * self.growth * gk)
+            self._floor = float(out[lo + block.shape[0] - 1])
+        return out
+
+
+class ForceTorqueStream:
+    """
+    Spectral features of |F| and |T| over a sliding DFT window.
+
+    Input at ``input_rate`` (an integer multiple M of ``ft_rate_hz``) is averaged over blocks of
+    M samples (the block's time is its last sample's). A feature frame ends at every
+    ``ft_hop``-th decimated sample once ``ft_window`` samples (and the delta history) are
+    there; its time is the time of its last sample.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        Window, hop, window function, detrending and extra features.
+    input_rate : float
+        Wrench sample rate in Hz.
+    gap_reset_s : float
+        A stamp gap longer than this restarts the window (the DFT needs uniform samples).
+    backjump_tolerance_s : float
+        A stamp earlier than the previous one by more than this raises :class:`TimeJumpError`;
+        by less (a duplicate or reordered message) raises :class:`InputError`.
+
+    """
+
+    def __init__(self, *, config: FeatureConfig, input_rate: float,
+                 gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
+        ratio = input_rate / config.ft_rate_hz if config.ft_rate_hz else 0.0
+        if not math.isfinite(ratio) or ratio < 1 or abs(ratio - round(ratio)) > 1e-6:
+            raise ConfigError(f'wrench rate {input_rate} Hz must be an integer multiple of the '
+                              f'feature rate ft_rate_hz={config.ft_rate_hz} Hz')
+        self.config = config
+        self.input_rate = float(input_rate)
+        self.decimation = int(round(ratio))
+        self.gap_reset_s = max(gap_reset_s, 1.5 / input_rate)
+        self.backjump_tolerance_s = backjump_tolerance_s
+        self.use_delta = [name for name in config.extra_features if name.endswith('_delta')]
+        n = config.ft_window
+        need = max(n, config.delta_lag + config.delta_window) if self.use_delta else n
+        self.first_end = need - 1
+        self.history = need
+        self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
+        self._offsets = np.arange(n)
+        self.restarts = 0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything, including the last stamp seen."""
+        self.last_input_t: Optional[float] = None
+        self._restart()
+
+    def _restart(self) -> None:
+        # Forget the window, previous spectra and partial block; keep the last stamp.
+        self._block_t = np.zeros(0)
+        self._block_v = np.zeros((0, 6))
+        self._mag = np.zeros((0, 2))        # |F|, |T| of the newest decimated samples
+        self._mag_t = np.zeros(0)           # their times
+        self._mag_start = 0                 # decimated index of self._mag[0]
+        self._n_dec = 0                     # decimated samples since the restart
+        self._prev_en: Optional[np.ndarray] = None   # (2, n_bins) previous EN spectra
+
+    def check_stamps(self, t: np.ndarray) -> None:
+        """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
+        if t.size > 1 and not np.all(np.diff(t) > 0):
+            raise InputError('wrench stamps within a message are not strictly increasing')
+        if self.last_input_t is not None and t[0] <= self.last_input_t:
+            back = self.last_input_t - t[0]
+            if back > self.backjump_tolerance_s:
+                raise TimeJumpError(f'wrench stamp {t[0]:.6f} is {back:.3f} s before the '
+                                    'previous one (time jumped backwards)')
+            raise InputError(f'wrench stamp {t[0]:.6f} repeats or precedes the previous one '
+                             f'({self.last_input_t:.6f}); message dropped')
+
+    def push(self, *, t: np.ndarray, force: np.ndarray,
+             torque: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Add wrench samples; return the feature frames they complete.
+
+        Parameters
+        ----------
+        t : np.ndarray, shape (n,)
+            Sample stamps, seconds, strictly increasing.
+        force, torque : np.ndarray, shape (n, 3)
+            Force in N and torque in N m, finite.
+
+        Returns
+        -------
+        t_frames : np.ndarray, shape (m,)
+            Time of each feature frame's last sample.
+        features : np.ndarray, shape (m, len(self.columns))
+
+        """
+        self.check_stamps(t)
+        # Split where the stamps jump forward by more than the gap: a reset between segments.
+        previous = self.last_input_t if self.last_input_t is not None else t[0]
+        gaps = np.flatnonzero(np.diff(np.concatenate([[previous], t])) > self.gap_reset_s)
+        values = np.concatenate([force, torque], axis=1)
+        bounds = list(gaps) + [t.size]
+        out_t, out_f = [], []
+        lo = 0
+        for hi in bounds:
+            if hi > lo:
+                ft, ff = self._push_segment(t[lo:hi], values[lo:hi])
+                out_t.append(ft)
+                out_f.append(ff)
+            if hi < t.size:
+                self.restarts += 1
+                self._restart()
+            lo = hi
+        self.last_input_t = float(t[-1])
+        if not out_t:
+            return np.zeros(0), np.zeros((0, len(self.columns)))
+        return np.concatenate(out_t), np.concatenate(out_f)
+
+    def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        m = self.decimation
+        bt = np.concatenate([self._block_t, t])
+        bv = np.concatenate([self._block_v, v])
+        n_blocks = bt.size // m
+        used = n_blocks * m
+        self._block_t, self._block_v = bt[used:], bv[used:]
+        if n_blocks == 0:
+            return np.zeros(0), np.zeros((0, len(self.columns)))
+        dec_t = bt[m - 1:used:m]
+        dec_v = bv[:used].reshape(n_blocks, m, 6).mean(axis=1) if m > 1 else bv[:used]
+        mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
+                        np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
+        self._mag = np.concatenate([self._mag, mag])
+        self._mag_t = np.concatenate([self._mag_t, dec_t])
+        first_new = self._n_dec
+        self._n_dec += n_blocks
+        # Frame ends (decimated indices) that fall on the new samples.
+        hop, first_end = self.config.ft_hop, self.first_end
+        lo = max(first_new, first_end)
+        start_j = -(-(lo - first_end) // hop)
+        ends = first_end + hop * np.arange(start_j, (self._n_dec - 1 - first_end) // hop + 1)
+        if ends.size:
+            feats = self._features(ends - self._mag_start)
+            times = self._mag_t[ends - self._mag_start]
+        else:
+            feats, times = np.zeros((0, len(self.columns))), np.zeros(0)
+        keep = self._mag.shape[0] - min(self._mag.shape[0], self.history)
+        self._mag, self._mag_t = self._mag[keep:], self._mag_t[keep:]
+        self._mag_start += keep
+        return times, feats
+
+    def _features(self, ends: np.ndarray) -> np.ndarray:
+        cfg = self.config
+        n = cfg.ft_window
+        m = ends.size
+        # |F| and |T| windows side by side: one DFT call for both signals.
+        windows = self._mag[(ends - n + 1)[:, None] + self._offsets]        # (m, n, 2)
+        frames = windows.transpose(2, 0, 1).reshape(2 * m, n)
+        spectra = spectral.magnitude_spectrum(frames=frames, window_fn=cfg.ft_window_fn,
+                                              detrend=cfg.ft_detrend)
+        centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=n)
+        en = spectral.sum_normalised(spectra=spectra).reshape(2, m, -1)
+        prev = np.empty_like(en)
+        prev[:, 1:] = en[:, :-1]
+        prev[:, 0] = en[:, 0] if self._prev_en is None else self._prev_en
+        flux = spectral.spectral_flux(normalised=en.reshape(2 * m, -1),
+                                      previous=prev.reshape(2 * m, -1))
+        self._prev_en = en[:, -1].copy()
+        out = np.empty((m, len(self.columns)))
+        out[:, 0], out[:, 1], out[:, 2] = centroid[:m], spread[:m], flux[:m]
+        out[:, 3], out[:, 4], out[:, 5] = centroid[m:], spread[m:], flux[m:]
+        for col, name in enumerate(self.use_delta, start=6):
+            signal = self._mag[:, 0 if name == 'force_delta' else 1]
+            out[:, col] = delta_feature(signal=signal, ends=ends, window=cfg.delta_window,
+                                        lag=cfg.delta_lag)
+        return out
+
+
+def delta_feature(*, signal: np.ndarray, ends: np.ndarray, window: int, lag: int) -> np.ndarray:
+    """
+    Change of a magnitude signal: ``mean(s[e-w+1..e]) - mean(s[e-lag-w+1..e-lag])``.
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n,)
+        |F| in N or |T| in N m.
+    ends : np.ndarray, shape (m,)
+        Indices of the newest sample of each frame, ``>= lag + window - 1``.
+    window, lag : int
+        Samples averaged, and distance between the two averages.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        Same unit as ``signal``.
+
+    """
+    offsets = np.arange(1 - window, 1)
+    new = signal[ends[:, None] + offsets].mean(axis=1)
+    old = signal[(ends - lag)[:, None] + offsets].mean(axis=1)
+    return new - old
+
+
+class StreamingFeatureExtractor:
+    """
+    Per-audio-frame feature vectors from interleaved audio chunks and wrench samples.
+
+    An audio frame ending at ``t_a`` is emitted once the wrench stream has delivered a sample
+    later than ``t_a - 0.5 / input_rate`` (so no F/T sample at or before ``t_a`` can still
+    arrive) and is given the newest F/T feature frame ending at or before ``t_a``. If that
+    frame is older than ``max_ft_age_s``, or none exists, the row is marked invalid. Frames
+    waiting for F/T longer than ``max_ft_wait_s`` of audio time are emitted invalid-or-aligned
+    with what is there, so a dead F/T sensor cannot stall the output.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        The feature contract.
+    audio_rate : float
+        Audio sample rate, Hz.
+    ft_input_rate : float or None
+        Wrench rate, Hz (default ``config.ft_rate_hz``).
+    max_ft_age_s : float or None
+        Largest accepted ``t_a - t_ft``; default ``ft_hop / ft_rate_hz + 0.05``.
+    max_ft_wait_s : float
+        Longest wait for F/T, seconds of audio time after the frame's chunk arrived.
+    history_s : float
+        How much F/T feature history is kept for late audio, seconds.
+    ft_gap_reset_s : float
+        Wrench gap that restarts the F/T window, seconds.
+    audio_gap_tolerance_s : float
+        Audio lateness that restarts the audio stream, seconds.
+
+    """
+
+    def __init__(self, *, config: FeatureConfig, audio_rate: float,
+                 ft_input_rate: Optional[float] = None, max_ft_age_s: Optional[float] = None,
+                 max_ft_wait_s: float = 0.25, history_s: float = 10.0,
+                 ft_gap_reset_s: float = 0.05, audio_gap_tolerance_s: float = 0.2) -> None:
+        self.config = config
+        self.names = config.feature_names
+        self.audio = AudioFramer(config=config, sample_rate=audio_rate,
+                                 gap_tolerance_s=audio_gap_tolerance_s)
+        self.ft = ForceTorqueStream(config=config,
+                                    input_rate=ft_input_rate or config.ft_rate_hz,
+                                    gap_reset_s=ft_gap_reset_s)
+        self.floor = NoiseFloor(config=config)
+        self.max_ft_age_s = (config.ft_hop / config.ft_rate_hz + 0.05
+                             if max_ft_age_s is None else max_ft_age_s)
+        self.max_ft_wait_s = max_ft_wait_s
+        self.ready_margin_s = 0.5 / self.ft.input_rate
+        self.history_frames = max(16, int(history_s * config.ft_rate_hz / config.ft_hop))
+        self._ft_dst = np.array([i for i, n in enumerate(self.names) if n in self.ft.columns])
+        self._ft_col = np.array([self.ft.columns.index(self.names[i]) for i in self._ft_dst])
+        self._rel_idx = (self.names.index('audio_power_rel_db')
+                         if 'audio_power_rel_db' in self.names else None)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything: buffers, anchors, previous spectra, pending frames."""
+        self.audio.reset()
+        self.ft.reset()
+        self.floor.reset()
+        self._ft_t = np.zeros(0)
+        self._ft_x = np.zeros((0, len(self.ft.columns)))
+        self._pend_t = np.zeros(0)
+        self._pend_a = np.zeros((0, 2))     # power, dB above floor
+        self._pend_arrival = np.zeros(0)
+
+    @property
+    def pending(self) -> int:
+        """Audio frames waiting for F/T."""
+        return int(self._pend_t.size)
+
+    def push_audio(self, samples: np.ndarray, *, stamp: Optional[float] = None) -> FeatureFrames:
+        """
+        Add an audio chunk (int16 or float in [-1, 1]); return the frames now complete.
+
+        Parameters
+        ----------
+        samples : np.ndarray, shape (n,)
+            Mono audio.
+        stamp : float or None
+            Time of the chunk's last sample, seconds (see :class:`AudioFramer`).
+
+        Raises
+        ------
+        InputError
+            Malformed chunk (nothing is changed).
+        TimeJumpError
+            The stamp jumped backwards (nothing is changed; reset and push again).
+
+        """
+        unit = to_unit_audio(samples)
+        t, power = self.audio.push(unit, stamp=stamp)
+        if t.size:
+            rel = (spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
+                   if self._rel_idx is not None else np.zeros_like(power))
+            arrival = self.audio.latest_time
+            self._pend_t = np.concatenate([self._pend_t, t])
+            self._pend_a = np.concatenate([self._pend_a, np.stack([power, rel], axis=1)])
+            self._pend_arrival = np.concatenate([self._pend_arrival,
+                                                 np.full(t.size, arrival)])
+        return self._drain(force=False)
+
+    def push_wrench(self, *, t: np.ndarray, force: np.ndarray,
+                    torque: np.ndarray) -> FeatureFrames:
+        """
+        Add wrench samples; return the audio frames they make complete.
+
+        Parameters
+        ----------
+        t : np.ndarray, shape (n,)
+            Header stamps, seconds, strictly increasing.
+        force, torque : np.ndarray, shape (n, 3)
+            N and N m.
+
+        Raises
+        ------
+        InputError
+            Wrong shapes, NaN/Inf, repeated or out-of-order stamps (nothing is changed).
+        TimeJumpError
+            Stamps jumped backwards (nothing is changed; reset and push again).
+
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        force = np.atleast_2d(np.asarray(force, dtype=np.float64))
+        torque = np.atleast_2d(np.asarray(torque, dtype=np.float64))
+        if t.ndim != 1 or force.shape != (t.size, 3) or torque.shape != (t.size, 3):
+            raise InputError(f'wrench arrays have shapes t{t.shape}, force{force.shape}, '
+                             f'torque{torque.shape}; expected (n,), (n, 3), (n, 3)')
+        if t.size == 0:
+            return FeatureFrames.empty(self.names)
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(force))
+                and np.all(np.isfinite(torque))):
+            raise InputError('wrench contains NaN or Inf')
+        ft_t, ft_x = self.ft.push(t=t, force=force, torque=torque)
+        if ft_t.size:
+            keep = self.history_frames
+            self._ft_t = np.concatenate([self._ft_t, ft_t])[-keep:]
+            self._ft_x = np.concatenate([self._ft_x, ft_x])[-keep:]
+        return self._drain(force=False)
+
+    def flush(self) -> FeatureFrames:
+        """Emit every pending frame with the F/T data there is (end of a recording)."""
+        return self._drain(force=True)
+
+    def _drain(self, *, force: bool) -> FeatureFrames:
+        n = self._pend_t.size
+        if n == 0:
+            return FeatureFrames.empty(self.names)
+        if force:
+            count = n
+        else:
+            last = self.ft.last_input_t
+            ready = 0 if last is None else int(
+                np.searchsorted(self._pend_t, last + self.ready_margin_s, side='left'))
+            latest = self.audio.latest_time
+            timed_out = 0 if latest is None else int(np.searchsorted(
+                self._pend_arrival, latest - self.max_ft_wait_s, side='left'))
+            count = max(ready, timed_out)
+        if count == 0:
+            return FeatureFrames.empty(self.names)
+        t = self._pend_t[:count]
+        audio = self._pend_a[:count]
+        self._pend_t = self._pend_t[count:]
+        self._pend_a = self._pend_a[count:]
+        self._pend_arrival = self._pend_arrival[count:]
+        x = np.zeros((count, len(self.names)))
+        x[:, 0] = audio[:, 0]
+        if self._rel_idx is not None:
+            x[:, self._rel_idx] = audio[:, 1]
+        idx = np.searchsorted(self._ft_t, t, side='right') - 1
+        valid = idx >= 0
+        valid[valid] &= (t[valid] - self._ft_t[idx[valid]]) <= self.max_ft_age_s
+        if valid.any():
+            rows = np.flatnonzero(valid)[:, None]
+            x[rows, self._ft_dst] = self._ft_x[idx[valid]][:, self._ft_col]
+        return FeatureFrames(t=t, x=x, valid=valid, names=self.names)

@@ -1,0 +1,405 @@
+"""A random forest flattened for fast, bit-exact inference without scikit-learn's overhead.
+
+scikit-learn's ``RandomForestClassifier.predict_proba`` costs about half a millisecond per call
+whatever the batch size (input validation, a thread pool, one array per tree). The live node
+classifies one audio frame at a time, so :class:`CompiledForest` evaluates the same trees
+directly:
+
+* :meth:`CompiledForest.predict_one` (the live path) walks every tree in Python. The top
+  ``codegen_depth`` levels of each tree are turned into a generated Python function of nested
+  ``if x3 <= 0.25:`` statements (one compare-and-jump per level, no memory look-ups); deeper
+  subtrees are walked over nested tuples.
+* :meth:`CompiledForest.predict_proba` (batches) advances all rows of all trees one level per
+  numpy step.
+
+Exactness. Both paths return the same float64 values as ``forest.predict_proba(x)[:, 1]``
+bit for bit, because they repeat scikit-learn's arithmetic (version 1.9):
+
+1. ``x`` is cast to float32 (``validate_data(dtype=np.float32)``); each node compares the
+   float32 value, widened exactly to float64, with the float64 threshold:
+   ``x[f] <= threshold`` goes left (``Tree._apply_dense``).
+2. A tree's P(contact) is ``tree_.value[leaf, 0, 1]``: since scikit-learn 1.4 classification
+   trees store the weighted class fractions of each node in ``value``, and
+   ``DecisionTreeClassifier.predict_proba`` returns them without further arithmetic.
+3. The forest sums the per-tree probabilities in estimator order into a float64 zero
+   (``_accumulate_prediction`` with ``n_jobs=None``), then divides by the number of trees:
+   ``p = (((0.0 + p_0) + p_1) + ... + p_{T-1}) / T``. Python floats and numpy float64 both
+   use IEEE-754 binary64 with round-to-nearest, so the same sequence of operations gives
+   the same bits.
+
+With ``n_jobs > 1`` scikit-learn adds the trees in whatever order its threads finish, so
+scikit-learn itself is then only reproducible to the last bit when the order happens to
+match; models are trained and compared with ``n_jobs=None``.
+"""
+
+import math
+from typing import Any, Callable, List, Sequence, Tuple
+
+import numpy as np
+
+from contact_detector.errors import InputError, ModelError
+
+#: Levels of each tree compiled to Python code by default. Compiling costs roughly 15 us
+#: per node; deeper levels are visited by few frames, so compiling them buys little. Python's
+#: tokenizer refuses more than 100 levels of indentation, hence the cap.
+DEFAULT_CODEGEN_DEPTH = 24
+MAX_CODEGEN_DEPTH = 96
+
+#: Rows per chunk of the batch path (bounds its temporary arrays to a few MB).
+_BATCH_CHUNK = 32768
+
+_Node = Tuple[int, float, Any, Any]
+
+
+def _walk(x: List[float], node: _Node) -> float:
+    """
+    Walk one (sub)tree stored as nested tuples and return its leaf's P(contact).
+
+    Parameters
+    ----------
+    x : list of float
+        The frame's features, already rounded to float32 and widened to Python floats.
+    node : tuple
+        ``(feature, threshold, left, right)`` for a split; ``(-1, p_contact, None, None)``
+        for a leaf.
+
+    """
+    f, t, left, right = node
+    while f >= 0:
+        f, t, left, right = left if x[f] <= t else right
+    return t
+
+
+class CompiledForest:
+    """
+    A fitted binary random forest in flat arrays, evaluated without scikit-learn.
+
+    Build it with :meth:`from_sklearn`. Instances are immutable after construction and safe
+    to share between threads.
+
+    Attributes
+    ----------
+    n_features : int
+        Length of the feature vector the forest expects.
+    n_trees : int
+        Number of trees.
+    codegen_depth : int
+        Tree levels evaluated by generated code in :meth:`predict_one`.
+
+    """
+
+    def __init__(self, *, feature: np.ndarray, threshold: np.ndarray, left: np.ndarray,
+                 right: np.ndarray, p_contact: np.ndarray, roots: np.ndarray,
+                 n_features: int, codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> None:
+        """
+        Build from flat node arrays; prefer :meth:`from_sklearn`.
+
+        Parameters
+        ----------
+        feature : np.ndarray of int, shape (n_nodes,)
+            Feature index tested by each split node; ignored for leaves.
+        threshold : np.ndarray of float64, shape (n_nodes,)
+            Split threshold; a frame goes left when ``float32(x[feature]) <= threshold``.
+        left, right : np.ndarray of int, shape (n_nodes,)
+            Global indices of the children; ``-1`` in ``left`` marks a leaf.
+        p_contact : np.ndarray of float64, shape (n_nodes,)
+            Probability of class 1 at each node (used at leaves).
+        roots : np.ndarray of int, shape (n_trees,)
+            Index of each tree's root, in estimator order.
+        n_features : int
+            Feature vector length.
+        codegen_depth : int
+            Levels per tree compiled to Python code, 0 ... :data:`MAX_CODEGEN_DEPTH`.
+
+        """
+        if isinstance(codegen_depth, bool) or not isinstance(codegen_depth, int) \
+                or not 0 <= codegen_depth <= MAX_CODEGEN_DEPTH:
+            raise ModelError(f'codegen_depth must be an int in [0, {MAX_CODEGEN_DEPTH}], '
+                             f'got {codegen_depth!r}')
+        self.n_features = int(n_features)
+        self.n_trees = int(len(roots))
+        self.codegen_depth = codegen_depth
+        n_nodes = len(left)
+        feature = np.asarray(feature, dtype=np.intp)
+        left = np.asarray(left, dtype=np.intp)
+        right = np.asarray(right, dtype=np.intp)
+        threshold = np.asarray(threshold, dtype=np.float64)
+        p_contact = np.asarray(p_contact, dtype=np.float64)
+        roots = np.asarray(roots, dtype=np.intp)
+        if self.n_trees < 1 or self.n_features < 1 or not (
+                feature.shape == threshold.shape == right.shape == p_contact.shape
+                == (n_nodes,)):
+            raise ModelError('CompiledForest needs at least one tree and one feature and node '
+                             'arrays of equal length')
+        is_leaf = left < 0
+        split = ~is_leaf
+        if (np.any((roots < 0) | (roots >= n_nodes))
+                or np.any((left[split] <= np.flatnonzero(split)) | (left[split] >= n_nodes))
+                or np.any((right[split] <= np.flatnonzero(split)) | (right[split] >= n_nodes))
+                or np.any((feature[split] < 0) | (feature[split] >= self.n_features))
+                or not np.all(np.isfinite(threshold[split]))
+                or not np.all(np.isfinite(p_contact[is_leaf]))):
+            raise ModelError('CompiledForest: malformed tree arrays (children must follow their '
+                             'parent, features must be in range, thresholds and leaf values '
+                             'finite)')
+        # Batch arrays: leaves point at themselves so finished rows can stay in the loop.
+        own = np.arange(n_nodes, dtype=np.intp)
+        self._left = np.where(is_leaf, own, left)
+        self._right = np.where(is_leaf, own, right)
+        self._feature = np.where(is_leaf, 0, feature)
+        self._threshold = np.where(is_leaf, 0.0, threshold)
+        self._is_split = split
+        self._p_contact = np.where(is_leaf, p_contact, 0.0)
+        self._roots = roots
+        for array in (self._left, self._right, self._feature, self._threshold, self._is_split,
+                      self._p_contact, self._roots):
+            array.flags.writeable = False
+        self._tree_fns = tuple(
+            self._build_tree_fn(root=int(root), feature=feature, threshold=threshold,
+                                left=left, right=right, p_contact=p_contact, tree_index=k)
+            for k, root in enumerate(roots))
+
+    @classmethod
+    def from_sklearn(cls, forest: Any, *,
+                     codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> 'CompiledForest':
+        """
+        Flatten a fitted ``RandomForestClassifier`` with classes ``[0, 1]``.
+
+        Parameters
+        ----------
+        forest : sklearn.ensemble.RandomForestClassifier
+            Fitted, single output, ``classes_ == [0, 1]`` (1 = contact).
+        codegen_depth : int
+            Levels of each tree compiled to Python code for :meth:`predict_one`
+            (0 = walk every level over tuples; no code generated).
+
+        Returns
+        -------
+        CompiledForest
+
+        Raises
+        ------
+        ModelError
+            If ``forest`` is not such a forest.
+
+        """
+        estimators = getattr(forest, 'estimators_', None)
+        classes = getattr(forest, 'classes_', None)
+        if not estimators or classes is None:
+            raise ModelError(f'expected a fitted RandomForestClassifier, got {type(forest)!r}')
+        if getattr(forest, 'n_outputs_', 1) != 1 or np.asarray(classes).tolist() != [0, 1]:
+            raise ModelError('the forest must be a single-output binary classifier with classes '
+                             f'[0, 1] (1 = contact), got classes {np.asarray(classes).tolist()}')
+        parts = {name: [] for name in ('feature', 'threshold', 'left', 'right', 'p_contact')}
+        roots = []
+        offset = 0
+        for estimator in estimators:
+            tree = estimator.tree_
+            if tree.value.shape[1:] != (1, 2):
+                raise ModelError(f'unexpected tree value shape {tree.value.shape}; expected '
+                                 '(n_nodes, 1, 2) for a binary classifier')
+            left = tree.children_left.astype(np.intp)
+            right = tree.children_right.astype(np.intp)
+            leaf = left < 0
+            roots.append(offset)
+            parts['feature'].append(tree.feature.astype(np.intp))
+            parts['threshold'].append(tree.threshold.astype(np.float64))
+            parts['left'].append(np.where(leaf, -1, left + offset))
+            parts['right'].append(np.where(leaf, -1, right + offset))
+            # sklearn >= 1.4 stores class fractions in value: no normalisation left to do.
+            parts['p_contact'].append(tree.value[:, 0, 1].astype(np.float64))
+            offset += tree.node_count
+        return cls(**{name: np.concatenate(chunks) for name, chunks in parts.items()},
+                   roots=np.asarray(roots, dtype=np.intp),
+                   n_features=int(forest.n_features_in_), codegen_depth=codegen_depth)
+
+    # ------------------------------------------------------------------ build helpers
+
+    def _build_tree_fn(self, *, root: int, feature: np.ndarray, threshold: np.ndarray,
+                       left: np.ndarray, right: np.ndarray, p_contact: np.ndarray,
+                       tree_index: int) -> Callable[[List[float]], float]:
+        """Return ``fn(x) -> P(contact)`` for one tree: generated code on top, tuples below."""
+        feat_l = feature.tolist()
+        thr_l = threshold.tolist()
+        left_l = left.tolist()
+        right_l = right.tolist()
+        p_l = p_contact.tolist()
+        tuples = {}
+
+        def as_tuples(top: int) -> _Node:
+            # Children have larger indices than their parent, so a reverse sweep over the
+            # subtree's index range builds every child before its parent (no recursion).
+            order = []
+            stack = [top]
+            while stack:
+                node = stack.pop()
+                order.append(node)
+                if left_l[node] >= 0:
+                    stack.append(right_l[node])
+                    stack.append(left_l[node])
+            for node in sorted(order, reverse=True):
+                if left_l[node] < 0:
+                    tuples[node] = (-1, p_l[node], None, None)
+                else:
+                    tuples[node] = (feat_l[node], thr_l[node], tuples.pop(left_l[node]),
+                                    tuples.pop(right_l[node]))
+            return tuples.pop(top)
+
+        if self.codegen_depth == 0:
+            root_tuple = as_tuples(root)
+            return lambda x: _walk(x, root_tuple)
+
+        names = ', '.join(f'x{k}' for k in range(self.n_features))
+        lines = ['def tree(x):', f' {names}, = x']
+        subtrees = []
+        # Depth-first emission; ('else', indent) entries emit the else line between branches.
+        stack: list = [(root, 0)]
+        while stack:
+            node, depth = stack.pop()
+            indent = ' ' * (depth + 1) if node != 'else' else ' ' * depth
+            if node == 'else':
+                lines.append(indent + 'else:')
+            elif left_l[node] < 0:
+                lines.append(f'{indent}return {p_l[node]!r}')
+            elif depth >= self.codegen_depth:
+                subtrees.append(as_tuples(node))
+                lines.append(f'{indent}return _walk(x, _S[{len(subtrees) - 1}])')
+            else:
+                lines.append(f'{indent}if x{feat_l[node]} <= {thr_l[node]!r}:')
+                stack.append((right_l[node], depth + 1))
+                stack.append(('else', depth + 1))
+                stack.append((left_l[node], depth + 1))
+        # The source holds only integer indices and float reprs produced here (thresholds and
+        # leaf values were checked finite), so compiling it cannot run foreign code.
+        namespace = {'__builtins__': {}, '_walk': _walk, '_S': tuple(subtrees)}
+        code = compile('\n'.join(lines) + '\n', f'<contact_detector tree {tree_index}>', 'exec')
+        exec(code, namespace)  # noqa: S102
+        return namespace['tree']
+
+    # ------------------------------------------------------------------ inference
+
+    def predict_one(self, x: Any) -> float:
+        """
+        P(contact) of one frame: the live path.
+
+        Parameters
+        ----------
+        x : array_like, shape (n_features,)
+            One feature vector (any real dtype; cast to float32 like scikit-learn).
+
+        Returns
+        -------
+        float
+            Bit-identical to ``forest.predict_proba(x[None, :])[0, 1]``.
+
+        Raises
+        ------
+        InputError
+            Wrong shape, non-numeric dtype, or a value that is NaN/Inf after the float32 cast.
+
+        """
+        arr = x if type(x) is np.ndarray else np.asarray(x)
+        if arr.shape != (self.n_features,) or arr.dtype.kind not in 'biuf':
+            raise InputError(f'predict_one expects a real vector of shape ({self.n_features},), '
+                             f'got shape {arr.shape} dtype {arr.dtype}')
+        xs = arr.astype(np.float32).tolist()
+        # A sum of finite float32 values cannot overflow float64: one test covers all values.
+        if not math.isfinite(sum(xs)):
+            raise InputError(f'predict_one: non-finite feature value (after float32 cast) in '
+                             f'{arr.tolist()}')
+        total = 0.0
+        for tree_fn in self._tree_fns:
+            total += tree_fn(xs)
+        return total / self.n_trees
+
+    def predict_proba(self, x: Any) -> np.ndarray:
+        """
+        P(contact) of a batch of frames.
+
+        Parameters
+        ----------
+        x : array_like, shape (n_frames, n_features)
+            Feature matrix (any real dtype; cast to float32 like scikit-learn). ``n_frames``
+            may be 0.
+
+        Returns
+        -------
+        np.ndarray of float64, shape (n_frames,)
+            Bit-identical to ``forest.predict_proba(x)[:, 1]``.
+
+        Raises
+        ------
+        InputError
+            Wrong shape, non-numeric dtype, or NaN/Inf after the float32 cast.
+
+        """
+        arr = np.asarray(x)
+        if arr.ndim != 2 or arr.shape[1] != self.n_features or arr.dtype.kind not in 'biuf':
+            raise InputError(f'predict_proba expects a real matrix of shape (n, '
+                             f'{self.n_features}), got shape {arr.shape} dtype {arr.dtype}')
+        with np.errstate(over='ignore'):
+            x32 = np.ascontiguousarray(arr, dtype=np.float32)
+        finite = np.isfinite(x32).all(axis=1)
+        if not finite.all():
+            bad = np.flatnonzero(~finite)
+            raise InputError(f'predict_proba: {bad.size} row(s) with non-finite values (after '
+                             f'float32 cast), first at row {int(bad[0])}')
+        out = np.empty(x32.shape[0], dtype=np.float64)
+        for start in range(0, x32.shape[0], _BATCH_CHUNK):
+            chunk = x32[start:start + _BATCH_CHUNK]
+            out[start:start + chunk.shape[0]] = self._predict_chunk(chunk)
+        return out
+
+    def _predict_chunk(self, x32: np.ndarray) -> np.ndarray:
+        """Batch path on float32 rows; see :meth:`predict_proba`."""
+        n_rows, n_feat = x32.shape
+        n_trees = self.n_trees
+        flat_x = x32.ravel()
+        # One slot per (tree, row), tree-major, so the per-tree sums below run in tree order.
+        node = np.repeat(self._roots, n_rows)
+        base = np.tile(np.arange(n_rows, dtype=np.intp) * n_feat, n_trees)
+        active = np.flatnonzero(self._is_split[node])
+        while active.size:
+            current = node[active]
+            # float32 widened to float64 against the float64 threshold, as Tree._apply_dense.
+            go_left = (flat_x[base[active] + self._feature[current]].astype(np.float64)
+                       <= self._threshold[current])
+            nxt = np.where(go_left, self._left[current], self._right[current])
+            node[active] = nxt
+            active = active[self._is_split[nxt]]
+        leaf_p = self._p_contact[node].reshape(n_trees, n_rows)
+        total = np.zeros(n_rows, dtype=np.float64)
+        for k in range(n_trees):
+            total += leaf_p[k]
+        total /= n_trees
+        return total
+
+
+def check_same_as_sklearn(*, forest: Any, compiled: CompiledForest,
+                          x: Sequence[Sequence[float]]) -> bool:
+    """
+    Return whether ``compiled`` reproduces ``forest.predict_proba(x)[:, 1]`` bit for bit.
+
+    Used by tests and the benchmark; cheap enough to run once after loading a model.
+
+    Parameters
+    ----------
+    forest : sklearn.ensemble.RandomForestClassifier
+        The source forest.
+    compiled : CompiledForest
+        Built from ``forest``.
+    x : array_like, shape (n_frames, n_features)
+        Frames to compare on.
+
+    Returns
+    -------
+    bool
+        True when the batch path and the single-frame path both equal scikit-learn exactly.
+
+    """
+    arr = np.asarray(x)
+    expected = forest.predict_proba(arr)[:, 1]
+    batch = compiled.predict_proba(arr)
+    single = np.array([compiled.predict_one(row) for row in arr], dtype=np.float64)
+    return bool(np.array_equal(expected.view(np.uint64), batch.view(np.uint64))
+                and np.array_equal(expected.view(np.uint64), single.view(np.uint64)))

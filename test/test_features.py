@@ -1,0 +1,285 @@
+"""Feature core on synthetic signals: known answers, streaming == batch, causality, bad input."""
+
+from hypothesis import given, settings, strategies as st
+import numpy as np
+import pytest
+
+from contact_detector.errors import ConfigError, InputError
+from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFeatureExtractor,
+                                       TimeJumpError)
+from contact_detector.features import spectral
+from contact_detector.features.batch import batch_features
+
+T0 = 1_700_000_000.0
+
+
+# --- pure per-frame functions -------------------------------------------------------------
+
+@pytest.mark.parametrize('k0', [1, 3, 7, 15])
+def test_pure_tone_centroid_is_its_frequency(k0):
+    n = 32
+    frames = np.sin(2 * np.pi * k0 * np.arange(n) / n)[None, :]
+    spectra = spectral.magnitude_spectrum(frames=frames)
+    centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=n)
+    # bin k0 of an N-point DFT at rate Fs is k0 * Fs / N Hz; normalised by Fs/2: 2 k0 / N
+    assert centroid[0] == pytest.approx(2 * k0 / n, abs=1e-9)
+    assert spread[0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_white_noise_centroid_and_spread_of_a_flat_spectrum():
+    rng = np.random.default_rng(1)
+    frames = rng.normal(size=(400, 1024))
+    spectra = spectral.magnitude_spectrum(frames=frames)
+    centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=1024)
+    # a flat spectrum over nu in [0, 1] has centroid 1/2 and spread 1/sqrt(12)
+    assert np.median(centroid) == pytest.approx(0.5, abs=0.01)
+    assert np.median(spread) == pytest.approx(1 / np.sqrt(12), abs=0.01)
+
+
+def test_flux_of_identical_frames_is_zero_and_of_disjoint_tones_is_two():
+    n = 32
+    a = spectral.sum_normalised(spectra=spectral.magnitude_spectrum(
+        frames=np.sin(2 * np.pi * 3 * np.arange(n) / n)[None, :]))
+    b = spectral.sum_normalised(spectra=spectral.magnitude_spectrum(
+        frames=np.sin(2 * np.pi * 9 * np.arange(n) / n)[None, :]))
+    assert spectral.spectral_flux(normalised=a, previous=a)[0] == 0.0
+    assert spectral.spectral_flux(normalised=a, previous=b)[0] == pytest.approx(2.0, abs=1e-9)
+
+
+def test_audio_power_of_known_signals():
+    assert spectral.audio_power(frames=np.full((1, 512), 0.5))[0] == pytest.approx(0.25)
+    sine = np.sin(2 * np.pi * 1000 * np.arange(16000) / 16000)[None, :]
+    assert spectral.audio_power(frames=sine)[0] == pytest.approx(0.5, abs=1e-9)
+
+
+def test_silence_gives_zeros_not_nan():
+    zeros = np.zeros((2, 32))
+    spectra = spectral.magnitude_spectrum(frames=zeros)
+    centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=32)
+    en = spectral.sum_normalised(spectra=spectra)
+    assert np.all(centroid == 0) and np.all(spread == 0)
+    assert np.all(spectral.spectral_flux(normalised=en, previous=en) == 0)
+
+
+def test_mean_detrend_removes_the_static_load():
+    rng = np.random.default_rng(2)
+    wiggle = rng.normal(size=(1, 32))
+    light = spectral.magnitude_spectrum(frames=2.0 + wiggle, detrend='mean')
+    heavy = spectral.magnitude_spectrum(frames=15.0 + wiggle, detrend='mean')
+    np.testing.assert_allclose(light, heavy, atol=1e-12)
+
+
+# --- streaming extractor ------------------------------------------------------------------
+
+def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
+    rng = np.random.default_rng(seed)
+    audio = (rng.normal(0, 0.05, int(seconds * audio_rate)) * 32767).astype(np.int16)
+    n_ft = int(seconds * ft_rate)
+    ft_t = T0 + ft_offset + np.arange(n_ft) / ft_rate
+    force = rng.normal(0, 1, (n_ft, 3)) + [0.0, 0.0, 5.0]
+    torque = rng.normal(0, 0.1, (n_ft, 3))
+    return audio, ft_t, force, torque
+
+
+def stream(*, extractor, audio, audio_rate, ft_t, force, torque, audio_chunks, ft_chunks,
+           flush=True):
+    """Push chunks in the order of their last sample's time, as they would arrive."""
+    a_ends = np.minimum(np.cumsum(audio_chunks), audio.size)
+    f_ends = np.minimum(np.cumsum(ft_chunks), ft_t.size)
+    a_ends = sorted(set(a_ends.tolist()) | {audio.size})
+    f_ends = sorted(set(f_ends.tolist()) | {ft_t.size})
+    events = [(T0 + (e - 1) / audio_rate, 0, e) for e in a_ends]
+    events += [(ft_t[e - 1], 1, e) for e in f_ends]
+    out, la, lf = [], 0, 0
+    for _, kind, end in sorted(events):
+        if kind == 0:
+            out.append(extractor.push_audio(audio[la:end], stamp=T0 + (end - 1) / audio_rate))
+            la = end
+        else:
+            out.append(extractor.push_wrench(t=ft_t[lf:end], force=force[lf:end],
+                                             torque=torque[lf:end]))
+            lf = end
+    if flush:
+        out.append(extractor.flush())
+    return FeatureFrames.concat(out, extractor.names)
+
+
+configs = st.builds(
+    FeatureConfig,
+    ft_window=st.sampled_from([8, 16, 32]),
+    ft_hop=st.sampled_from([1, 2, 5]),
+    ft_window_fn=st.sampled_from(['rect', 'hann']),
+    ft_detrend=st.sampled_from(['none', 'mean']),
+    extra_features=st.sampled_from([(), ('audio_power_rel_db', 'force_delta', 'torque_delta')]),
+)
+
+
+@settings(max_examples=30, deadline=None)
+@given(config=configs,
+       rates=st.sampled_from([(16000, 100), (44100, 100), (48000, 1000), (22050, 200)]),
+       seed=st.integers(0, 10_000),
+       audio_chunk=st.integers(1, 20_000),
+       ft_chunk=st.integers(1, 60))
+def test_streaming_equals_batch_for_any_chunking(config, rates, seed, audio_chunk, ft_chunk):
+    audio_rate, ft_rate = rates
+    if ft_rate % config.ft_rate_hz:
+        ft_rate = 100
+    audio, ft_t, force, torque = make_signals(seed=seed, seconds=1.5, audio_rate=audio_rate,
+                                              ft_rate=ft_rate)
+    rng = np.random.default_rng(seed)
+    audio_chunks = rng.integers(1, audio_chunk + 1, size=audio.size)
+    ft_chunks = rng.integers(1, ft_chunk + 1, size=ft_t.size)
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate,
+                                          ft_input_rate=ft_rate, max_ft_wait_s=1e9)
+    got = stream(extractor=extractor, audio=audio, audio_rate=audio_rate, ft_t=ft_t,
+                 force=force, torque=torque, audio_chunks=audio_chunks, ft_chunks=ft_chunks)
+    ref = batch_features(config=config, audio=audio, audio_rate=audio_rate, audio_t0=T0,
+                         ft_t=ft_t, force=force, torque=torque, ft_input_rate=ft_rate)
+    assert len(got) == len(ref) > 0
+    np.testing.assert_allclose(got.t, ref.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got.x, ref.x, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(got.valid, ref.valid)
+    assert ref.valid.sum() > len(ref) // 2
+
+
+@pytest.mark.parametrize('audio_rate', [16000, 44100, 48000])
+def test_frame_timing_is_the_same_at_every_audio_rate(audio_rate):
+    config = FeatureConfig()
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate)
+    t, _ = extractor.audio.push(np.zeros(audio_rate), stamp=T0 + (audio_rate - 1) / audio_rate)
+    # 32 ms frames every 10 ms: frame i ends at 0.032 + 0.010 i s (its last sample)
+    expected = T0 + 0.032 + 0.010 * np.arange(t.size) - 1 / audio_rate
+    assert t.size == 97
+    np.testing.assert_allclose(t, expected, atol=0.5 / audio_rate)
+    assert extractor.audio.frame_length == round(0.032 * audio_rate)
+
+
+def test_features_use_no_future_samples():
+    config = FeatureConfig(extra_features=('force_delta', 'torque_delta'))
+    audio, ft_t, force, torque = make_signals(seed=3, seconds=2.0, audio_rate=16000,
+                                              ft_rate=100)
+    ref = batch_features(config=config, audio=audio, audio_rate=16000, audio_t0=T0, ft_t=ft_t,
+                         force=force, torque=torque)
+    cut = T0 + 1.2
+    future_force = force.copy()
+    future_force[ft_t > cut] += 50.0
+    future_audio = audio.copy()
+    future_audio[int(1.2 * 16000) + 1:] = 30000
+    changed = batch_features(config=config, audio=future_audio, audio_rate=16000, audio_t0=T0,
+                             ft_t=ft_t, force=future_force, torque=torque)
+    before = ref.t <= cut
+    np.testing.assert_array_equal(ref.x[before], changed.x[before])
+    assert not np.array_equal(ref.x[~before], changed.x[~before])
+
+
+def test_silence_streams_finite_features():
+    extractor = StreamingFeatureExtractor(config=FeatureConfig(
+        extra_features=('audio_power_rel_db', 'force_delta', 'torque_delta')), audio_rate=16000)
+    frames = stream(extractor=extractor, audio=np.zeros(16000, dtype=np.int16),
+                    audio_rate=16000, ft_t=T0 + np.arange(100) / 100, force=np.zeros((100, 3)),
+                    torque=np.zeros((100, 3)), audio_chunks=[160] * 100, ft_chunks=[1] * 100)
+    assert len(frames) > 90 and np.all(np.isfinite(frames.x)) and np.all(frames.x == 0)
+
+
+def test_bad_input_is_rejected_with_a_clear_error_and_changes_nothing():
+    extractor = StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000)
+    extractor.push_wrench(t=[T0], force=[[0, 0, 1]], torque=[[0, 0, 0]])
+    with pytest.raises(InputError, match='NaN or Inf'):
+        extractor.push_wrench(t=[T0 + 0.01], force=[[np.nan, 0, 1]], torque=[[0, 0, 0]])
+    with pytest.raises(InputError, match='NaN or Inf'):
+        extractor.push_audio(np.array([0.1, np.inf]), stamp=T0)
+    with pytest.raises(InputError, match='1-D'):
+        extractor.push_audio(np.zeros((10, 2), dtype=np.int16), stamp=T0)
+    with pytest.raises(InputError, match='int16 or float'):
+        extractor.push_audio(np.zeros(10, dtype=np.int32), stamp=T0)
+    with pytest.raises(InputError, match='shapes'):
+        extractor.push_wrench(t=[T0 + 0.01], force=[[0, 1]], torque=[[0, 0, 0]])
+    with pytest.raises(InputError, match='repeats or precedes'):
+        extractor.push_wrench(t=[T0], force=[[0, 0, 1]], torque=[[0, 0, 0]])
+    with pytest.raises(TimeJumpError, match='backwards'):
+        extractor.push_wrench(t=[T0 - 5], force=[[0, 0, 1]], torque=[[0, 0, 0]])
+    # the stream goes on from where it was
+    extractor.push_wrench(t=[T0 + 0.01], force=[[0, 0, 1]], torque=[[0, 0, 0]])
+    assert extractor.ft.last_input_t == T0 + 0.01
+
+
+def test_wrench_gap_restarts_the_window_and_marks_frames_invalid():
+    config = FeatureConfig(ft_window=16)
+    audio, ft_t, force, torque = make_signals(seed=4, seconds=3.0, audio_rate=16000,
+                                              ft_rate=100)
+    keep = (ft_t < T0 + 1.0) | (ft_t > T0 + 1.2)     # a 200 ms dropout
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=16000)
+    frames = stream(extractor=extractor, audio=audio, audio_rate=16000, ft_t=ft_t[keep],
+                    force=force[keep], torque=torque[keep], audio_chunks=[160] * 400,
+                    ft_chunks=[1] * 400)
+    in_gap = (frames.t > T0 + 1.06) & (frames.t < T0 + 1.2)
+    warming = (frames.t > T0 + 1.2) & (frames.t < T0 + 1.2 + 15 / 100)
+    assert not frames.valid[in_gap].any() and not frames.valid[warming].any()
+    assert frames.valid[frames.t > T0 + 1.4].all()
+    assert extractor.ft.restarts == 1
+
+
+def test_one_khz_wrench_is_block_averaged_to_the_feature_rate():
+    config = FeatureConfig()
+    audio, ft_t, force, torque = make_signals(seed=5, seconds=1.5, audio_rate=16000,
+                                              ft_rate=100, ft_offset=0.0093)
+    # 1 kHz input whose 10-sample block means are the 100 Hz signal
+    fast_t = (ft_t[:, None] - 0.009 + 0.001 * np.arange(10)[None, :]).ravel()
+    wiggle = np.tile(np.linspace(-1, 1, 10), ft_t.size)[:, None]
+    fast_force = np.repeat(force, 10, axis=0) + wiggle
+    fast_torque = np.repeat(torque, 10, axis=0) - 0.1 * wiggle
+    slow = batch_features(config=config, audio=audio, audio_rate=16000, audio_t0=T0,
+                          ft_t=ft_t, force=force, torque=torque)
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=16000, ft_input_rate=1000)
+    fast = stream(extractor=extractor, audio=audio, audio_rate=16000, ft_t=fast_t,
+                  force=fast_force, torque=fast_torque, audio_chunks=[320] * 100,
+                  ft_chunks=[7] * 2000)
+    np.testing.assert_allclose(fast.x, slow.x, atol=1e-9)
+
+
+def test_buffers_stay_bounded_over_a_long_stream():
+    config = FeatureConfig()
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=16000, history_s=2.0)
+    rng = np.random.default_rng(6)
+    n_audio = 0
+    for k in range(600):        # 60 s in 100 ms steps
+        chunk = (rng.normal(0, 0.01, 1600) * 32767).astype(np.int16)
+        n_audio += chunk.size
+        extractor.push_audio(chunk, stamp=T0 + (n_audio - 1) / 16000)
+        t = T0 + 0.1 * k + np.arange(10) / 100
+        extractor.push_wrench(t=t, force=rng.normal(size=(10, 3)),
+                              torque=rng.normal(size=(10, 3)))
+        assert extractor.audio._buf.size <= extractor.audio.frame_length + 1600
+        assert extractor._ft_t.size <= extractor.history_frames
+        assert extractor.pending <= 20
+
+
+def test_audio_stamps_with_jitter_and_a_dropout():
+    extractor = StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000)
+    rng = np.random.default_rng(7)
+    n = 0
+    for _ in range(100):
+        n += 160
+        extractor.push_audio(np.zeros(160, dtype=np.int16),
+                             stamp=T0 + (n - 1) / 16000 + rng.uniform(0, 0.003))
+    # the anchor is the least-delayed chunk: times are late by at most the smallest jitter
+    assert extractor.audio.latest_time - (T0 + (n - 1) / 16000) < 0.0005
+    n += 16000   # one second of audio lost
+    extractor.push_audio(np.zeros(160, dtype=np.int16), stamp=T0 + (n - 1) / 16000)
+    assert extractor.audio.restarts == 1
+    with pytest.raises(TimeJumpError):
+        extractor.push_audio(np.zeros(160, dtype=np.int16), stamp=T0)
+
+
+def test_config_validation_names_the_field():
+    with pytest.raises(ConfigError, match='ft_window'):
+        FeatureConfig(ft_window=2)
+    with pytest.raises(ConfigError, match='audio_hop_s'):
+        FeatureConfig(audio_hop_s=0.1, audio_frame_s=0.05)
+    with pytest.raises(ConfigError, match='extra_features'):
+        FeatureConfig(extra_features=('nope',))
+    with pytest.raises(ConfigError, match='integer multiple'):
+        StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000, ft_input_rate=150)
+    assert FeatureConfig.from_dict(FeatureConfig().to_dict()) == FeatureConfig()
+    with pytest.raises(ConfigError, match='unknown'):
+        FeatureConfig.from_dict({'bogus': 1})
