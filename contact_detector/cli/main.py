@@ -8,10 +8,10 @@ from typing import Optional, Sequence
 COMMANDS = {
     'demo': ('demo', 'simulate trials, run the node live on them, print a verdict per trial'),
     'simulate': ('simulate', 'write simulated glass-placing trials as rosbag2 + manifest'),
-    'plot': ('plot', 'plot a bag like the paper\'s figure 4'),
+    'plot': ('plot', "plot a bag like the paper's figure 4"),
     'features': ('features', 'run the feature core on a generated signal and report it'),
-    'train': ('train', 'train the contact forest on bags (the paper\'s protocol)'),
-    'detect': ('detect', 'run the node\'s processing on bags, write JSONL decisions'),
+    'train': ('train', "train the contact forest on bags (the paper's protocol)"),
+    'detect': ('detect', "run the node's processing on bags, write JSONL decisions"),
     'evaluate': ('evaluate', 'event metrics of the forest and the baselines against truth'),
     'replay': ('replay', 'publish a bag into the live ROS graph with its original timing'),
     'sweep': ('sweep', 'sweep feature and decision settings on held-out trials'),

@@ -5,12 +5,13 @@ whatever the batch size (input validation, a thread pool, one array per tree). T
 classifies one audio frame at a time, so :class:`CompiledForest` evaluates the same trees
 directly:
 
-* :meth:`CompiledForest.predict_one` (the live path) walks every tree in Python. The top
-  ``codegen_depth`` levels of each tree are turned into a generated Python function of nested
-  ``if x3 <= 0.25:`` statements (one compare-and-jump per level, no memory look-ups); deeper
-  subtrees are walked over nested tuples.
+* :meth:`CompiledForest.predict_one` (the live path) runs one generated Python function per
+  tree: nested ``if x3 <= 0.25:`` statements, one compare-and-jump per level on local
+  variables and constants, ``return <leaf probability>`` at the leaves. Levels below
+  ``codegen_depth`` (Python refuses more than 100 levels of indentation) are walked over
+  nested tuples instead, about twice as slow per level.
 * :meth:`CompiledForest.predict_proba` (batches) advances all rows of all trees one level per
-  numpy step.
+  numpy step; batches of at most 32 rows use the per-row path.
 
 Exactness. Both paths return the same float64 values as ``forest.predict_proba(x)[:, 1]``
 bit for bit, because they repeat scikit-learn's arithmetic (version 1.9):
@@ -32,23 +33,52 @@ scikit-learn itself is then only reproducible to the last bit when the order hap
 match; models are trained and compared with ``n_jobs=None``.
 """
 
+from collections import OrderedDict
+import hashlib
 import math
+import threading
 from typing import Any, Callable, List, Sequence, Tuple
 
 import numpy as np
 
 from contact_detector.errors import InputError, ModelError
 
-#: Levels of each tree compiled to Python code by default. Compiling costs roughly 15 us
-#: per node; deeper levels are visited by few frames, so compiling them buys little. Python's
-#: tokenizer refuses more than 100 levels of indentation, hence the cap.
-DEFAULT_CODEGEN_DEPTH = 24
+#: Levels of each tree compiled to Python code. Python's tokenizer refuses more than 100 levels
+#: of indentation, hence the cap. Compiling costs about 8 us per node (~1.5 s for 8 trees of
+#: 20k nodes); deep levels still matter because they are where the cache misses are.
 MAX_CODEGEN_DEPTH = 96
+DEFAULT_CODEGEN_DEPTH = MAX_CODEGEN_DEPTH
 
 #: Rows per chunk of the batch path (bounds its temporary arrays to a few MB).
 _BATCH_CHUNK = 32768
+#: Batches up to this size go through the per-row path (numpy overhead dominates below).
+_SMALL_BATCH = 32
+#: The batch path drops finished (tree, row) slots every this many levels.
+_COMPACT_EVERY = 4
+
+#: Compiled forests kept by :meth:`CompiledForest.from_sklearn`, keyed by content hash.
+_CACHE_SIZE = 4
+_cache: 'OrderedDict[tuple, CompiledForest]' = OrderedDict()
+_cache_lock = threading.Lock()
 
 _Node = Tuple[int, float, Any, Any]
+
+
+def forest_content_sha256(forest: Any) -> str:
+    """
+    SHA-256 of a fitted forest's trees: structure, thresholds and leaf values, in tree order.
+
+    Independent of the file format and of pickling details, so it identifies what the forest
+    computes (two forests with equal hashes give equal predictions).
+    """
+    digest = hashlib.sha256()
+    for estimator in forest.estimators_:
+        tree = estimator.tree_
+        for array, dtype in ((tree.children_left, '<i8'), (tree.children_right, '<i8'),
+                             (tree.feature, '<i8'), (tree.threshold, '<f8'),
+                             (tree.value, '<f8')):
+            digest.update(np.ascontiguousarray(array, dtype=dtype).tobytes())
+    return digest.hexdigest()
 
 
 def _walk(x: List[float], node: _Node) -> float:
@@ -144,14 +174,15 @@ class CompiledForest:
                              'finite)')
         # Batch arrays: leaves point at themselves so finished rows can stay in the loop.
         own = np.arange(n_nodes, dtype=np.intp)
-        self._left = np.where(is_leaf, own, left)
-        self._right = np.where(is_leaf, own, right)
+        self._children = np.empty(2 * n_nodes, dtype=np.intp)
+        self._children[0::2] = np.where(is_leaf, own, left)
+        self._children[1::2] = np.where(is_leaf, own, right)
         self._feature = np.where(is_leaf, 0, feature)
         self._threshold = np.where(is_leaf, 0.0, threshold)
         self._is_split = split
         self._p_contact = np.where(is_leaf, p_contact, 0.0)
         self._roots = roots
-        for array in (self._left, self._right, self._feature, self._threshold, self._is_split,
+        for array in (self._children, self._feature, self._threshold, self._is_split,
                       self._p_contact, self._roots):
             array.flags.writeable = False
         self._tree_fns = tuple(
@@ -176,6 +207,10 @@ class CompiledForest:
         Returns
         -------
         CompiledForest
+            Building one costs about 1.5 s for 8 trees of 20k nodes (mostly Python's
+            compiler), so the last few are cached by content hash (~15 ms): detectors built
+            again and again for the same model (one per bag, one per decision rule) share one
+            instance, and a forest that was refitted in place gets a new one.
 
         Raises
         ------
@@ -190,6 +225,22 @@ class CompiledForest:
         if getattr(forest, 'n_outputs_', 1) != 1 or np.asarray(classes).tolist() != [0, 1]:
             raise ModelError('the forest must be a single-output binary classifier with classes '
                              f'[0, 1] (1 = contact), got classes {np.asarray(classes).tolist()}')
+        key = (forest_content_sha256(forest), int(forest.n_features_in_), codegen_depth)
+        with _cache_lock:
+            if key in _cache:
+                _cache.move_to_end(key)
+                return _cache[key]
+        compiled = cls._build(forest, codegen_depth=codegen_depth)
+        with _cache_lock:
+            _cache[key] = compiled
+            while len(_cache) > _CACHE_SIZE:
+                _cache.popitem(last=False)
+        return compiled
+
+    @classmethod
+    def _build(cls, forest: Any, *, codegen_depth: int) -> 'CompiledForest':
+        """Flatten a checked forest (no cache); see :meth:`from_sklearn`."""
+        estimators = forest.estimators_
         parts = {name: [] for name in ('feature', 'threshold', 'left', 'right', 'p_contact')}
         roots = []
         offset = 0
@@ -198,6 +249,11 @@ class CompiledForest:
             if tree.value.shape[1:] != (1, 2):
                 raise ModelError(f'unexpected tree value shape {tree.value.shape}; expected '
                                  '(n_nodes, 1, 2) for a binary classifier')
+            if not np.allclose(tree.value.sum(axis=2), 1.0, rtol=0.0, atol=1e-9):
+                # scikit-learn < 1.4 stored weighted counts and normalised in predict_proba.
+                raise ModelError('tree values are not class fractions; forests from '
+                                 'scikit-learn < 1.4 are not supported, retrain with '
+                                 '`contact-detector train`')
             left = tree.children_left.astype(np.intp)
             right = tree.children_right.astype(np.intp)
             leaf = left < 0
@@ -273,7 +329,7 @@ class CompiledForest:
         # leaf values were checked finite), so compiling it cannot run foreign code.
         namespace = {'__builtins__': {}, '_walk': _walk, '_S': tuple(subtrees)}
         code = compile('\n'.join(lines) + '\n', f'<contact_detector tree {tree_index}>', 'exec')
-        exec(code, namespace)  # noqa: S102
+        exec(code, namespace)
         return namespace['tree']
 
     # ------------------------------------------------------------------ inference
@@ -302,11 +358,16 @@ class CompiledForest:
         if arr.shape != (self.n_features,) or arr.dtype.kind not in 'biuf':
             raise InputError(f'predict_one expects a real vector of shape ({self.n_features},), '
                              f'got shape {arr.shape} dtype {arr.dtype}')
-        xs = arr.astype(np.float32).tolist()
+        # Cast as sklearn's check_array does: astype for arrays, asarray(dtype) for sequences.
+        xs = (arr.astype(np.float32) if arr is x else np.asarray(x, dtype=np.float32)).tolist()
         # A sum of finite float32 values cannot overflow float64: one test covers all values.
         if not math.isfinite(sum(xs)):
             raise InputError(f'predict_one: non-finite feature value (after float32 cast) in '
                              f'{arr.tolist()}')
+        return self._predict_row(xs)
+
+    def _predict_row(self, xs: List[float]) -> float:
+        """P(contact) of one validated row given as Python floats (float32 values)."""
         total = 0.0
         for tree_fn in self._tree_fns:
             total += tree_fn(xs)
@@ -338,7 +399,8 @@ class CompiledForest:
             raise InputError(f'predict_proba expects a real matrix of shape (n, '
                              f'{self.n_features}), got shape {arr.shape} dtype {arr.dtype}')
         with np.errstate(over='ignore'):
-            x32 = np.ascontiguousarray(arr, dtype=np.float32)
+            x32 = np.ascontiguousarray(arr.astype(np.float32, copy=False) if arr is x
+                                       else np.asarray(x, dtype=np.float32))
         finite = np.isfinite(x32).all(axis=1)
         if not finite.all():
             bad = np.flatnonzero(~finite)
@@ -351,23 +413,34 @@ class CompiledForest:
         return out
 
     def _predict_chunk(self, x32: np.ndarray) -> np.ndarray:
-        """Batch path on float32 rows; see :meth:`predict_proba`."""
+        """Batch path on finite float32 rows; see :meth:`predict_proba`."""
         n_rows, n_feat = x32.shape
         n_trees = self.n_trees
+        if n_rows <= _SMALL_BATCH:
+            # numpy's per-call overhead (~60 levels x 10 calls) exceeds the per-row path here.
+            return np.array([self._predict_row(row) for row in x32.tolist()], dtype=np.float64)
         flat_x = x32.ravel()
         # One slot per (tree, row), tree-major, so the per-tree sums below run in tree order.
-        node = np.repeat(self._roots, n_rows)
+        slot = np.arange(n_trees * n_rows, dtype=np.intp)
+        current = np.repeat(self._roots, n_rows)
         base = np.tile(np.arange(n_rows, dtype=np.intp) * n_feat, n_trees)
-        active = np.flatnonzero(self._is_split[node])
-        while active.size:
-            current = node[active]
-            # float32 widened to float64 against the float64 threshold, as Tree._apply_dense.
-            go_left = (flat_x[base[active] + self._feature[current]].astype(np.float64)
-                       <= self._threshold[current])
-            nxt = np.where(go_left, self._left[current], self._right[current])
-            node[active] = nxt
-            active = active[self._is_split[nxt]]
-        leaf_p = self._p_contact[node].reshape(n_trees, n_rows)
+        final = np.empty(n_trees * n_rows, dtype=np.intp)
+        level = 0
+        while current.size:
+            # float32 widened exactly to float64 against the float64 threshold, as
+            # Tree._apply_dense; NaN was rejected, so '>' is exactly 'not <='.
+            go_right = flat_x[base + self._feature[current]] > self._threshold[current]
+            current = self._children[2 * current + go_right]
+            level += 1
+            # Leaves loop to themselves, so finished slots are only dropped now and then.
+            if level % _COMPACT_EVERY == 0 or current.size <= _SMALL_BATCH:
+                split = self._is_split[current]
+                done = ~split
+                final[slot[done]] = current[done]
+                current = current[split]
+                base = base[split]
+                slot = slot[split]
+        leaf_p = self._p_contact[final].reshape(n_trees, n_rows)
         total = np.zeros(n_rows, dtype=np.float64)
         for k in range(n_trees):
             total += leaf_p[k]

@@ -1,0 +1,170 @@
+"""``contact-detector detect``: run the node's processing on bags, in bag time.
+
+    contact-detector detect BAG_OR_DIR... [--model M] [--params P] [--wrench-topic T]
+                            [--audio-topic T] [--audio-rate HZ] --out FILE.jsonl
+
+Writes one JSON object per line: for every audio frame
+``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
+``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's name, T the absolute
+bag time in seconds of the last audio sample the decision used. Each bag starts a fresh
+detector, armed. ``--params`` reads the node's YAML parameter file (the
+``contact_detector_node: ros__parameters:`` section), so offline runs use the robot's settings;
+``--audio-rate`` overrides ``audio.sample_rate``.
+"""
+
+import argparse
+import json
+from pathlib import Path
+import sys
+from typing import Optional, Sequence
+
+from tqdm import tqdm
+
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.offline import Run, run_detector
+from contact_detector.errors import ConfigError, ContactDetectorError
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import sensor_events, StreamSpec
+from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
+
+
+def read_node_params(path: Path) -> dict:
+    """
+    Return the node's parameters from a ROS 2 YAML parameter file, flattened ('a.b': v).
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read or has no ``ros__parameters`` section.
+
+    """
+    import yaml
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError) as err:
+        raise ConfigError(f'cannot read parameter file {path}: {err}') from err
+    section = None
+    for value in (data or {}).values():
+        if isinstance(value, dict) and 'ros__parameters' in value:
+            section = value['ros__parameters']
+            break
+    if section is None:
+        raise ConfigError(f'{path} has no "<node>: ros__parameters:" section')
+    flat = {}
+
+    def walk(prefix, node):
+        for key, value in node.items():
+            name = f'{prefix}.{key}' if prefix else key
+            if isinstance(value, dict):
+                walk(name, value)
+            else:
+                flat[name] = value
+    walk('', section)
+    return flat
+
+
+def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
+    """Map node parameters onto (DetectorSettings, StreamSpec fields, model path, rule)."""
+    rule = None
+    threshold = params.get('release.threshold', -1.0)
+    confirm = params.get('release.confirm_frames', 0)
+    refractory = params.get('release.refractory_s', -1.0)
+    overrides = {}
+    if threshold is not None and threshold >= 0:
+        overrides['threshold'] = float(threshold)
+    if confirm is not None and confirm > 0:
+        overrides['confirm_frames'] = int(confirm)
+    if refractory is not None and refractory >= 0:
+        overrides['refractory_s'] = float(refractory)
+    if overrides:
+        rule = overrides
+    settings = dict(
+        audio_rate=float(audio_rate or params.get('audio.sample_rate', 16000)),
+        wrench_rate=float(params.get('wrench.rate', 100.0)),
+        max_input_delay_s=float(params.get('max_input_delay_s', 0.5)),
+        warmup_s=float(params.get('warmup_s', 0.5)),
+    )
+    age = params.get('max_ft_age_s', 0.0)
+    if age and age > 0:
+        settings['max_ft_age_s'] = float(age)
+    channel = int(params.get('audio.channel', -1))
+    stream = dict(channels=int(params.get('audio.channels', 1)),
+                  channel=None if channel < 0 else channel)
+    return settings, stream, params.get('model.path', ''), rule
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command; return the exit status."""
+    parser = argparse.ArgumentParser(prog='contact-detector detect', description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('bags', nargs='+', help='bag directories or folders of bags')
+    parser.add_argument('--model', type=Path, default=None,
+                        help='model bundle (default: model.path from --params, else the '
+                             'shipped model)')
+    parser.add_argument('--params', type=Path, default=None, help='node parameter YAML')
+    parser.add_argument('--wrench-topic', default='/wrist_wrench')
+    parser.add_argument('--audio-topic', default='/audio')
+    parser.add_argument('--audio-rate', type=float, default=None,
+                        help='audio sample rate, Hz (overrides audio.sample_rate)')
+    parser.add_argument('--out', type=Path, required=True, help='JSONL output file')
+    args = parser.parse_args(argv)
+    try:
+        return _detect(args)
+    except ContactDetectorError as err:
+        print(f'contact-detector detect: {err}', file=sys.stderr)
+        return 1
+
+
+def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path],
+                           audio_rate: Optional[float]):
+    """Return (make_detector, stream_fields) from a model path and node parameters."""
+    params = read_node_params(params_file) if params_file else {}
+    settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
+    path = model or (Path(model_param) if model_param else default_model_path())
+    bundle = load_bundle(path=path)
+    if rule is not None:
+        base = bundle.decision_rule.to_dict()
+        base.update(rule)
+        settings['rule'] = DecisionRule.from_dict(base)
+    detector_settings = DetectorSettings(**settings)
+
+    def make() -> ContactDetector:
+        return ContactDetector(bundle=bundle, settings=detector_settings)
+    return make, stream
+
+
+def detect_bag(*, bag: Path, make_detector, spec: StreamSpec) -> Run:
+    """Run a fresh, armed detector over one bag."""
+    return run_detector(sensor_events(bag, spec=spec), detector=make_detector())
+
+
+def _detect(args: argparse.Namespace) -> int:
+    make, stream = build_detector_factory(model=args.model, params_file=args.params,
+                                          audio_rate=args.audio_rate)
+    spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic, **stream)
+    bags = find_bags(args.bags)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    frames = releases = 0
+    with args.out.open('w') as out:
+        for bag in tqdm(bags, desc='detect', unit='bag', disable=len(bags) < 2):
+            run = detect_bag(bag=bag, make_detector=make, spec=spec)
+            name = bag.name
+            rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
+                                   'contact': bool(c)})
+                    for t, p, c in zip(run.t, run.p, run.contact)]
+            rows += [(float(t), 1, {'bag': name, 't': float(t), 'event': 'release'})
+                     for t in run.releases]
+            # A release line follows the frame that fired it.
+            lines = [json.dumps(row) for _, _, row in sorted(rows, key=lambda r: r[:2])]
+            out.write('\n'.join(lines) + ('\n' if lines else ''))
+            frames += len(run.t)
+            releases += len(run.releases)
+            if run.counts.get('audio_dropped') or run.counts.get('wrench_dropped'):
+                print(f'{name}: dropped {run.counts["audio_dropped"]} audio and '
+                      f'{run.counts["wrench_dropped"]} wrench messages', file=sys.stderr)
+    print(f'{len(bags)} bags, {frames} frames, {releases} releases -> {args.out}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,185 @@
+"""``contact-detector sweep``: choose features, label window and decision rule by measurement.
+
+    contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
+
+Trains the paper's forest (10 trees, max_features = sqrt) per feature setting and label window
+on the training trials, then scores every decision rule on the held-out trials: detections,
+misses, premature releases, latency, contact events blamed on exogenous impacts, frame
+precision/recall. With ``--ablation`` it also trains on all condition sets but one and tests on
+the one left out (heavy, soft, noisy, gain), for the settings that are meant to generalise.
+"""
+
+import argparse
+import json
+from pathlib import Path
+import sys
+from typing import List, Optional, Sequence
+
+from tqdm import tqdm
+
+from contact_detector.cli.evaluate import truth_for
+from contact_detector.cli.train import conditions_of
+from contact_detector.features.config import FeatureConfig
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import load_events, StreamSpec
+from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetting,
+                                          fit_forest, rows_markdown, score_rules)
+from contact_detector.model.training import LabelWindow
+
+EXTRAS = ('audio_power_rel_db', 'force_delta', 'torque_delta')
+ONSET = LabelWindow(0.0, 0.1)
+STATE = LabelWindow(0.0, 0.3)
+
+
+def feature_grid(name: str) -> List[FeatureSetting]:
+    """Return the feature settings to try."""
+    paper = FeatureConfig(ft_window=160, ft_hop=128)
+    base = FeatureConfig(ft_window=32, ft_hop=1)
+    grid = [
+        FeatureSetting('paper W160 H128, onset labels', paper, ONSET),
+        FeatureSetting('W32 H1, onset labels', base, ONSET),
+        FeatureSetting('W32 H1, state labels', base, STATE),
+        FeatureSetting('W32 H1 detrend, state labels', FeatureConfig(ft_detrend='mean'), STATE),
+        FeatureSetting('W32 H1 detrend+extras, onset labels',
+                       FeatureConfig(ft_detrend='mean', extra_features=EXTRAS), ONSET),
+        FeatureSetting('W32 H1 detrend+extras, state labels',
+                       FeatureConfig(ft_detrend='mean', extra_features=EXTRAS), STATE),
+    ]
+    if name == 'full':
+        grid += [
+            FeatureSetting('W16 H1 detrend+extras, state labels',
+                           FeatureConfig(ft_window=16, ft_detrend='mean',
+                                         extra_features=EXTRAS), STATE),
+            FeatureSetting('W64 H1 detrend+extras, state labels',
+                           FeatureConfig(ft_window=64, ft_detrend='mean',
+                                         extra_features=EXTRAS), STATE),
+            FeatureSetting('W32 H4 detrend+extras, state labels',
+                           FeatureConfig(ft_hop=4, ft_detrend='mean', extra_features=EXTRAS),
+                           STATE),
+            FeatureSetting('audio 16 ms / 5 ms, W32 H1 detrend+extras, state labels',
+                           FeatureConfig(audio_frame_s=0.016, audio_hop_s=0.005,
+                                         ft_detrend='mean', extra_features=EXTRAS), STATE),
+            FeatureSetting('W32 H1 detrend+extras, labels 0-0.5 s',
+                           FeatureConfig(ft_detrend='mean', extra_features=EXTRAS),
+                           LabelWindow(0.0, 0.5)),
+        ]
+    return grid
+
+
+def rule_grid() -> List[DecisionRule]:
+    """Thresholds x confirmation frames."""
+    return [DecisionRule(threshold=th, confirm_frames=k, refractory_s=1.0)
+            for th in (0.3, 0.5, 0.7, 0.9) for k in (1, 2, 3, 5)]
+
+
+def ablation_settings() -> List[FeatureSetting]:
+    """Return the settings compared on held-out condition sets."""
+    full = FeatureConfig(ft_detrend='mean', extra_features=EXTRAS)
+    return [
+        FeatureSetting('paper 7 features, no detrend', FeatureConfig(), STATE),
+        FeatureSetting('paper 7, detrend', FeatureConfig(ft_detrend='mean'), STATE),
+        FeatureSetting('detrend + extras', full, STATE),
+        FeatureSetting('detrend + extras, without raw audio power', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n != 'audio_power')),
+        FeatureSetting('audio only (power, dB above floor)', full, STATE,
+                       columns=('audio_power', 'audio_power_rel_db')),
+        FeatureSetting('F/T only', full, STATE,
+                       columns=tuple(n for n in full.feature_names
+                                     if not n.startswith('audio'))),
+        FeatureSetting('reduced: dB above floor + torque centroid/spread + deltas', full, STATE,
+                       columns=('audio_power_rel_db', 'torque_centroid', 'torque_spread',
+                                'force_delta', 'torque_delta')),
+    ]
+
+
+def decode(bags, spec, tag):
+    """Decode every bag once: 'tag/name' -> (events, truth)."""
+    manifest = conditions_of(bags)
+    out = {}
+    for bag in tqdm(bags, desc=f'decode {tag}', unit='bag'):
+        events = load_events(bag, spec=spec)
+        out[f'{tag}/{bag.name}'] = (events, truth_for(bag, events, manifest))
+    return out
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command; return the exit status."""
+    parser = argparse.ArgumentParser(prog='contact-detector sweep', description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('train', help='training bags (folder)')
+    parser.add_argument('heldout', help='held-out bags (folder)')
+    parser.add_argument('--grid', choices=('quick', 'full'), default='quick')
+    parser.add_argument('--ablation', action='store_true')
+    parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--audio-rate', type=float, default=16000.0)
+    parser.add_argument('--wrench-rate', type=float, default=100.0)
+    parser.add_argument('--out', type=Path, default=None, help='markdown table file')
+    parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
+    args = parser.parse_args(argv)
+    spec = StreamSpec()
+    train = decode(find_bags([args.train]), spec, 'train')
+    heldout = decode(find_bags([args.heldout]), spec, 'heldout')
+    rules = rule_grid()
+    rows, best_rows = [], []
+    cache = {}
+    for setting in tqdm(feature_grid(args.grid), desc='settings', unit='setting'):
+        key = setting.config
+        if key not in cache:
+            cache = {key: (compute_frames(events_by_trial=train, config=key,
+                                          audio_rate=args.audio_rate,
+                                          wrench_rate=args.wrench_rate, jobs=args.jobs),
+                           compute_frames(events_by_trial=heldout, config=key,
+                                          audio_rate=args.audio_rate,
+                                          wrench_rate=args.wrench_rate, jobs=args.jobs))}
+        train_frames, heldout_frames = cache[key]
+        forest = fit_forest(frames=list(train_frames.values()), setting=setting,
+                            n_estimators=10, seed=args.seed, jobs=args.jobs)
+        scored = score_rules(forest=forest, frames=list(heldout_frames.values()),
+                             setting=setting, rules=rules)
+        rows += scored
+        best_rows.append(best_row(scored))
+    text = ['## Best rule per setting (held-out trials)', '', rows_markdown(best_rows), '',
+            '## Every rule', '', rows_markdown(rows), '']
+    if args.ablation:
+        text += ['## Ablation: train on the other condition sets, test on the one left out',
+                 '', ablation(train, heldout, args), '']
+    output = '\n'.join(text)
+    print(output)
+    if args.out:
+        args.out.write_text(output)
+    if args.json:
+        args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=2, default=str))
+    return 0
+
+
+def ablation(train, heldout, args) -> str:
+    """Leave-one-condition-out table for the ablation settings (rule p>=0.5 x2)."""
+    everything = {**train, **heldout}
+    rule = [DecisionRule(threshold=0.5, confirm_frames=2, refractory_s=1.0)]
+    lines = ['| setting | held-out condition | detected | premature | impact events | '
+             'latency median [ms] |', '|---|---|---|---|---|---|']
+    cache = {}
+    for setting in tqdm(ablation_settings(), desc='ablation', unit='setting'):
+        if setting.config not in cache:
+            cache = {setting.config: compute_frames(
+                events_by_trial=everything, config=setting.config,
+                audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, jobs=args.jobs)}
+        frames = cache[setting.config]
+        for condition in ('heavy', 'soft', 'noisy', 'gain'):
+            fit = [f for f in frames.values() if f.truth.condition != condition]
+            test = [f for f in frames.values() if f.truth.condition == condition]
+            if not test:
+                continue
+            forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=args.seed,
+                                jobs=args.jobs)
+            s = score_rules(forest=forest, frames=test, setting=setting, rules=rule)[0].summary
+            median = '-' if s['latency_ms_median'] is None else f"{s['latency_ms_median']:.0f}"
+            lines.append(f"| {setting.name} | {condition} | {s['detected']}/{s['trials']} | "
+                         f"{s['premature']} | {s['impact_events']} | {median} |")
+    return '\n'.join(lines)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

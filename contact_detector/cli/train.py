@@ -1,0 +1,291 @@
+"""``contact-detector train``: train the contact forest the paper's way and write its report.
+
+    contact-detector train BAG_OR_DIR... --out models/contact_forest.joblib --report DIR
+
+Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with rows
+``bag,onset_start,onset_end``); features from the same streaming core the node runs. The report
+directory gets ``summary.md``, ``metrics.json`` and PNG figures (confusion matrix, ROC curve,
+feature importance). The saved model is the trial-split forest refit on train + validation.
+"""
+
+import argparse
+from datetime import datetime, timezone
+import json
+from pathlib import Path
+import platform
+import sys
+from typing import Optional, Sequence
+
+from joblib import delayed, Parallel
+import numpy as np
+import sklearn
+from tqdm import tqdm
+
+import contact_detector
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.offline import run_detector
+from contact_detector.errors import ContactDetectorError
+from contact_detector.evaluation.metrics import score_trial, summarize, Truth
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import load_events, StreamSpec
+from contact_detector.model.bundle import DecisionRule, ModelBundle, save_bundle
+from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
+                                             trial_features)
+
+#: The defaults chosen by the sweep (docs/sweep.md); the paper's values are in docs/features.md.
+DEFAULT_FEATURES = FeatureConfig()
+DEFAULT_LABELS = LabelWindow()
+DEFAULT_RULE = DecisionRule()
+
+
+def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the feature/label/rule options shared by train and sweep."""
+    d = DEFAULT_FEATURES
+    parser.add_argument('--ft-window', type=int, default=d.ft_window,
+                        help=f'F/T DFT window, samples (default {d.ft_window})')
+    parser.add_argument('--ft-hop', type=int, default=d.ft_hop,
+                        help=f'F/T feature hop, samples (default {d.ft_hop})')
+    parser.add_argument('--ft-detrend', choices=('none', 'mean'), default=d.ft_detrend,
+                        help=f"remove each F/T window's mean (default {d.ft_detrend})")
+    parser.add_argument('--ft-window-fn', choices=('rect', 'hann'), default=d.ft_window_fn)
+    parser.add_argument('--extra-features', default=','.join(d.extra_features),
+                        help='comma-separated extra features (audio_power_rel_db, '
+                             'force_delta, torque_delta)')
+    parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
+                        help='label window start after the onset, s')
+    parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
+                        help='label window end after the onset, s')
+    parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
+    parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
+    parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)
+
+
+def config_from_args(args: argparse.Namespace) -> FeatureConfig:
+    """Build the FeatureConfig from parsed options."""
+    extra = tuple(e for e in args.extra_features.split(',') if e)
+    return FeatureConfig(ft_window=args.ft_window, ft_hop=args.ft_hop,
+                         ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
+                         extra_features=extra)
+
+
+def conditions_of(bags: Sequence[Path]) -> dict:
+    """Map bag name -> condition from manifests beside the bags, where there are any."""
+    out = {}
+    for parent in {b.parent for b in bags}:
+        manifest = parent / 'manifest.json'
+        if manifest.exists():
+            for trial in json.loads(manifest.read_text()).get('trials', []):
+                out[trial['name']] = trial
+    return out
+
+
+def write_figures(*, report: Path, split, names: Sequence[str]) -> None:
+    """Confusion matrix, ROC curve and feature importance of a split's test set as PNGs."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from sklearn.metrics import roc_curve
+
+    fig, ax = plt.subplots(figsize=(4, 3.5))
+    cm = np.array(split.confusion)
+    ax.imshow(cm, cmap='Blues')
+    for (i, j), v in np.ndenumerate(cm):
+        ax.text(j, i, str(v), ha='center', va='center',
+                color='white' if v > cm.max() / 2 else 'black')
+    ax.set_xticks([0, 1], ['not contact', 'contact'])
+    ax.set_yticks([0, 1], ['not contact', 'contact'])
+    ax.set_xlabel('predicted')
+    ax.set_ylabel('true')
+    ax.set_title(f'Confusion matrix ({split.name} split, test)')
+    fig.tight_layout()
+    fig.savefig(report / 'confusion_matrix.png', dpi=120)
+    plt.close(fig)
+
+    fpr, tpr, _ = roc_curve(split.y_test, split.p_test)
+    fig, ax = plt.subplots(figsize=(4, 3.5))
+    ax.plot(fpr, tpr, label=f'AUC = {split.test_auc:.4f}')
+    ax.plot([0, 1], [0, 1], 'k--', lw=0.8)
+    ax.set_xlabel('false positive rate')
+    ax.set_ylabel('true positive rate')
+    ax.set_title(f'ROC ({split.name} split, test)')
+    ax.legend(loc='lower right')
+    fig.tight_layout()
+    fig.savefig(report / 'roc.png', dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    importance = split.forest.feature_importances_
+    ax.barh(range(len(names)), importance)
+    ax.set_yticks(range(len(names)), names)
+    ax.invert_yaxis()
+    ax.set_xlabel('importance (mean decrease in impurity)')
+    ax.set_title('Feature importance')
+    fig.tight_layout()
+    fig.savefig(report / 'feature_importance.png', dpi=120)
+    plt.close(fig)
+
+
+def n_table_markdown(split) -> str:
+    """Return the paper's Table 1 for one split as markdown."""
+    lines = ['| n_estimators | accuracy | AUC |', '|---|---|---|']
+    for row in split.n_table:
+        mark = '**' if row['n_estimators'] == split.best_n else ''
+        lines.append(f"| {mark}{row['n_estimators']}{mark} | {row['accuracy']:.5f} | "
+                     f"{row['auc']:.5f} |")
+    return '\n'.join(lines)
+
+
+def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec,
+                  audio_rate: float, wrench_rate: float, manifest: dict) -> dict:
+    """Run the full detector on held-out bags; return the event summary and per-trial rows."""
+    outcomes = []
+    for bag in bags:
+        events = load_events(bag, spec=spec)
+        detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
+            audio_rate=audio_rate, wrench_rate=wrench_rate))
+        run = run_detector(events, detector=detector)
+        info = manifest.get(bag.name)
+        if info is None:
+            continue
+        truth = Truth(name=bag.name, condition=info.get('condition', ''),
+                      onset_t=info['onset_t'], contact_end_t=info.get('contact_end_t'),
+                      impacts=tuple((i['t'], i['kind'], i['in_air'])
+                                    for i in info.get('impacts', [])))
+        outcomes.append(score_trial(truth=truth, releases=run.releases, events=run.events))
+    return summarize(outcomes)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command; return the exit status."""
+    parser = argparse.ArgumentParser(prog='contact-detector train', description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('bags', nargs='+', help='bag directories or folders of bags')
+    parser.add_argument('--out', type=Path, default=Path('models/contact_forest.joblib'))
+    parser.add_argument('--report', type=Path, default=None, help='report directory')
+    parser.add_argument('--labels', type=Path, default=None,
+                        help='CSV of bag,onset_start,onset_end (instead of /contact_truth)')
+    parser.add_argument('--format', choices=('joblib', 'skops'), default='joblib')
+    parser.add_argument('--jobs', type=int, default=1, help='parallel workers')
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--audio-rate', type=float, default=16000.0)
+    parser.add_argument('--wrench-rate', type=float, default=100.0)
+    parser.add_argument('--wrench-topic', default='/wrist_wrench')
+    parser.add_argument('--audio-topic', default='/audio')
+    parser.add_argument('--no-events', action='store_true',
+                        help='skip the event metrics on the test trials')
+    add_feature_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return _train(args)
+    except ContactDetectorError as err:
+        print(f'contact-detector train: {err}', file=sys.stderr)
+        return 1
+
+
+def _train(args: argparse.Namespace) -> int:
+    config = config_from_args(args)
+    labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
+    rule = DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
+                        refractory_s=args.refractory)
+    spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic)
+    bags = find_bags(args.bags)
+    manifest = conditions_of(bags)
+    csv_onsets = read_labels_csv(args.labels) if args.labels else None
+    if csv_onsets is not None:
+        missing = [b.name for b in bags if b.name not in csv_onsets]
+        if missing:
+            print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
+                  file=sys.stderr)
+            return 1
+
+    def one(bag):
+        return trial_features(bag=bag, config=config, spec=spec, audio_rate=args.audio_rate,
+                              wrench_rate=args.wrench_rate, label_window=labels,
+                              onsets=csv_onsets[bag.name] if csv_onsets else None,
+                              condition=manifest.get(bag.name, {}).get('condition', ''))
+
+    trials = Parallel(n_jobs=args.jobs)(
+        delayed(one)(bag) for bag in tqdm(bags, desc='features', unit='bag'))
+    x = np.concatenate([t.x for t in trials])
+    y = np.concatenate([t.y for t in trials])
+    groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
+    names = [t.name for t in trials]
+    print(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
+    results = {}
+    with tqdm(total=2 * 11, desc='forests', unit='step') as bar:
+        for kind in ('sample', 'trial'):
+            results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
+                                      seed=args.seed, jobs=args.jobs,
+                                      progress=lambda _msg: bar.update(1))
+    quoted = results['trial']
+    metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
+                      'cv_accuracy_mean': r.cv_mean, 'cv_accuracy_sd': r.cv_sd,
+                      'test_auc': r.test_auc, 'test_report': r.report,
+                      'confusion_matrix': r.confusion}
+               for kind, r in results.items()}
+    training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
+                'conditions': sorted({t.condition for t in trials}),
+                'test_trials': quoted.test_trials, 'seed': args.seed,
+                'audio_rate': args.audio_rate, 'wrench_rate': args.wrench_rate}
+    bundle = ModelBundle(
+        forest=quoted.forest, feature_config=config, feature_names=config.feature_names,
+        feature_schema_version=FEATURE_SCHEMA_VERSION, label_window=labels.to_dict(),
+        decision_rule=rule,
+        versions={'contact_detector': contact_detector.__version__,
+                  'scikit-learn': sklearn.__version__, 'numpy': np.__version__,
+                  'python': platform.python_version()},
+        training=training, metrics=metrics,
+        created=datetime.now(timezone.utc).isoformat(timespec='seconds'))
+    if not args.no_events:
+        test_bags = [b for b in bags if b.name in set(quoted.test_trials)]
+        metrics['events_test_trials'] = event_metrics(
+            bundle=bundle, bags=tqdm(test_bags, desc='events', unit='bag'), spec=spec,
+            audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, manifest=manifest)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    path = save_bundle(bundle=bundle, path=args.out, fmt=args.format)
+    print(f'model written to {path}')
+    print(f'trial split: n_estimators={quoted.best_n}, test AUC {quoted.test_auc:.4f}, '
+          f'10-fold CV accuracy {quoted.cv_mean:.5f} (SD {quoted.cv_sd:.5f})')
+    print(quoted.report_text)
+    if 'events_test_trials' in metrics:
+        print('events on test trials:', json.dumps(metrics['events_test_trials']))
+    if args.report:
+        write_report(report=args.report, results=results, names=config.feature_names,
+                     training=training, metrics=metrics, model_path=path)
+        print(f'report written to {args.report}/summary.md')
+    return 0
+
+
+def write_report(*, report: Path, results: dict, names, training: dict, metrics: dict,
+                 model_path: Path) -> None:
+    """Write summary.md, metrics.json and the figures of the trial split."""
+    report.mkdir(parents=True, exist_ok=True)
+    write_figures(report=report, split=results['trial'], names=names)
+    (report / 'metrics.json').write_text(json.dumps(
+        {'training': training, 'metrics': metrics}, indent=2, default=float))
+    lines = [f'# Training report: {model_path.name}', '',
+             f"{training['trials']} trials ({', '.join(training['conditions']) or 'unlabelled'}"
+             f"), {training['frames']} frames, {training['contact_frames']} labelled contact.",
+             '', 'The paper split frames at random (**sample** split); neighbouring frames of '
+             'one trial then sit in training and test alike. The **trial** split keeps whole '
+             'trials apart and is the one we quote.', '']
+    for kind in ('trial', 'sample'):
+        r = results[kind]
+        lines += [f'## {kind.capitalize()} split', '',
+                  "n_estimators by validation ROC AUC (the paper's Table 1):", '',
+                  n_table_markdown(r), '',
+                  f'Stratified 10-fold cross-validation accuracy: {100 * r.cv_mean:.2f}% '
+                  f'(SD {100 * r.cv_sd:.2f}%).', '',
+                  "Test set classification report (the paper's Table 2):", '', '```',
+                  r.report_text.rstrip(), '```', '']
+    if 'events_test_trials' in metrics:
+        lines += ['## Events on the test trials (full detector, trial split)', '', '```',
+                  json.dumps(metrics['events_test_trials'], indent=2), '```', '']
+    lines += ['![confusion matrix](confusion_matrix.png) ![ROC](roc.png) '
+              '![feature importance](feature_importance.png)', '']
+    (report / 'summary.md').write_text('\n'.join(lines))
+
+
+if __name__ == '__main__':
+    sys.exit(main())

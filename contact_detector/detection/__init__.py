@@ -1,0 +1,1 @@
+"""Decision layer: release logic and the detector pipeline shared by the node and the tools."""

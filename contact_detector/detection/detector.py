@@ -1,0 +1,276 @@
+"""The detector pipeline: feature core + compiled forest + release logic + input health.
+
+:class:`ContactDetector` is everything the node does between "a message arrived, here are its
+arrays" and "publish these decisions". The live node, ``detect``, ``evaluate`` and the demo all
+drive this one class, so what is measured offline is what runs on the robot. It has no ROS
+import and reads no clock: every call passes the stream times (and, optionally, ``now``, the
+time the message was received, for the staleness check).
+"""
+
+from dataclasses import dataclass, field, replace
+import math
+from typing import Optional
+
+import numpy as np
+
+from contact_detector.detection.release import ReleaseLogic
+from contact_detector.errors import ConfigError, InputError
+from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
+                                                 TimeJumpError)
+from contact_detector.model.bundle import DecisionRule, ModelBundle
+from contact_detector.model.compiled_forest import CompiledForest
+
+
+@dataclass(frozen=True)
+class DetectorSettings:
+    """
+    Runtime settings of :class:`ContactDetector` (the node's parameters map onto these).
+
+    Attributes
+    ----------
+    audio_rate : float
+        Audio sample rate, Hz (any rate: frames are defined in seconds).
+    wrench_rate : float
+        Wrench rate, Hz; an integer multiple of the model's F/T feature rate.
+    max_ft_age_s : float or None
+        Largest age of the F/T features given to an audio frame; None = the core's default.
+    max_ft_wait_s : float
+        Longest an audio frame waits for F/T before it is decided without (invalid).
+    max_input_delay_s : float
+        A frame older than this when its message is processed (``now - t``) is stale.
+    warmup_s : float
+        No release during this long after the first audio frame following a reset.
+    corrupt_holdoff_s : float
+        No release during this long after a corrupt (dropped) message.
+    armed_on_start : bool
+        Whether a release may fire before the first ``arm`` call.
+    rule : DecisionRule or None
+        Overrides the model bundle's decision rule.
+
+    """
+
+    audio_rate: float = 16000.0
+    wrench_rate: float = 100.0
+    max_ft_age_s: Optional[float] = None
+    max_ft_wait_s: float = 0.25
+    max_input_delay_s: float = 0.5
+    warmup_s: float = 0.5
+    corrupt_holdoff_s: float = 0.2
+    armed_on_start: bool = True
+    rule: Optional[DecisionRule] = None
+
+    def __post_init__(self) -> None:
+        """Validate ranges; raise ConfigError naming the field."""
+        for name in ('max_ft_wait_s', 'max_input_delay_s', 'warmup_s', 'corrupt_holdoff_s'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f'{name} must be a finite number >= 0, got {value!r}')
+        if self.max_ft_age_s is not None and not self.max_ft_age_s > 0:
+            raise ConfigError(f'max_ft_age_s must be > 0, got {self.max_ft_age_s!r}')
+
+
+@dataclass
+class Decisions:
+    """
+    Decisions for a block of audio frames.
+
+    Attributes
+    ----------
+    t : np.ndarray, shape (n,)
+        Frame times (last audio sample used), seconds.
+    p : np.ndarray, shape (n,)
+        P(contact); 0 for invalid frames.
+    contact : np.ndarray, shape (n,), bool
+        The per-frame decision.
+    valid : np.ndarray, shape (n,), bool
+        Whether the frame had fresh, sound input.
+    releases : list of float
+        Times at which a release fired.
+    events : list of float
+        Times at which a contact event was confirmed, armed or not.
+    error : str or None
+        Why the message was dropped, if it was.
+
+    """
+
+    t: np.ndarray
+    p: np.ndarray
+    contact: np.ndarray
+    valid: np.ndarray
+    releases: list = field(default_factory=list)
+    events: list = field(default_factory=list)
+    error: Optional[str] = None
+
+    def __len__(self) -> int:
+        """Return the number of frames."""
+        return int(self.t.shape[0])
+
+    @classmethod
+    def empty(cls, error: Optional[str] = None) -> 'Decisions':
+        """Return a block with no frames."""
+        z = np.zeros(0)
+        return cls(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool), error=error)
+
+
+class ContactDetector:
+    """
+    Contact decisions and releases from audio chunks and wrench samples.
+
+    Parameters
+    ----------
+    bundle : ModelBundle
+        A loaded model (its feature configuration defines the features).
+    settings : DetectorSettings
+        Runtime settings.
+
+    """
+
+    COUNTERS = ('audio_msgs', 'wrench_msgs', 'audio_dropped', 'wrench_dropped', 'time_jumps',
+                'frames', 'invalid_frames', 'stale_frames', 'events', 'releases',
+                'audio_restarts', 'wrench_restarts')
+
+    def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
+        self.bundle = bundle
+        self.settings = settings
+        self.rule = settings.rule or bundle.decision_rule
+        try:
+            self.forest = CompiledForest.from_sklearn(bundle.forest)
+            self.extractor = StreamingFeatureExtractor(
+                config=bundle.feature_config, audio_rate=settings.audio_rate,
+                ft_input_rate=settings.wrench_rate, max_ft_age_s=settings.max_ft_age_s,
+                max_ft_wait_s=settings.max_ft_wait_s)
+        except InputError as err:
+            raise ConfigError(f'cannot build the detector: {err}') from err
+        self.logic = ReleaseLogic(rule=self.rule, armed=settings.armed_on_start)
+        self.counts = {name: 0 for name in self.COUNTERS}
+        self.last_error: Optional[str] = None
+        self.reset()
+
+    # --- control ---------------------------------------------------------------------------
+
+    def reset(self) -> None:
+        """Forget all stream state (buffers, anchors, confirmation run); keep arming."""
+        self.extractor.reset()
+        self.logic.reset()
+        self._warm_until: Optional[float] = None
+        self._holdoff_until = -math.inf
+        self.latest_audio_t: Optional[float] = None
+        self.latest_wrench_t: Optional[float] = None
+
+    def arm(self, armed: bool) -> None:
+        """Arm or disarm the release."""
+        self.logic.arm(armed)
+
+    @property
+    def armed(self) -> bool:
+        """Whether the next contact event releases."""
+        return self.logic.armed
+
+    def set_rule(self, rule: DecisionRule) -> None:
+        """Apply another decision rule from the next frame on (stream state and arming kept)."""
+        self.rule = rule
+        self.logic.rule = rule
+
+    # --- input -----------------------------------------------------------------------------
+
+    def on_audio(self, samples: np.ndarray, *, stamp: float,
+                 now: Optional[float] = None) -> Decisions:
+        """
+        Process a mono audio chunk whose last sample is at ``stamp``.
+
+        Corrupt chunks are dropped and counted (the audio stream restarts, so a lost chunk never
+        glues two pieces of sound together); a backwards time jump resets everything first.
+        """
+        self.counts['audio_msgs'] += 1
+        try:
+            frames = self._with_jump_reset(lambda: self.extractor.push_audio(samples,
+                                                                             stamp=stamp))
+        except InputError as err:
+            return self.drop(kind='audio', reason=str(err), stamp=stamp)
+        self.latest_audio_t = stamp
+        return self._decide(frames, now)
+
+    def on_wrench(self, *, t: np.ndarray, force: np.ndarray, torque: np.ndarray,
+                  now: Optional[float] = None) -> Decisions:
+        """Process wrench samples (stamps ``t`` s, force N, torque N m, shapes (n,), (n, 3))."""
+        self.counts['wrench_msgs'] += 1
+        try:
+            frames = self._with_jump_reset(lambda: self.extractor.push_wrench(
+                t=t, force=force, torque=torque))
+        except InputError as err:
+            stamp = None
+            try:
+                stamp = float(np.max(t))
+            except (TypeError, ValueError):
+                pass
+            return self.drop(kind='wrench', reason=str(err), stamp=stamp)
+        self.latest_wrench_t = float(np.max(t))
+        return self._decide(frames, now)
+
+    def flush(self) -> Decisions:
+        """Decide every frame still waiting for F/T (end of a recording)."""
+        return self._decide(self.extractor.flush(), None)
+
+    # --- internals ---------------------------------------------------------------------------
+
+    def _with_jump_reset(self, push):
+        try:
+            return push()
+        except TimeJumpError as err:
+            self.counts['time_jumps'] += 1
+            self.last_error = f'time jumped backwards, state reset: {err}'
+            self.reset()
+            return push()
+
+    def drop(self, *, kind: str, reason: str, stamp: Optional[float] = None) -> Decisions:
+        """
+        Count a corrupt message of ``kind`` ('audio' or 'wrench') and hold off releases.
+
+        Callers that reject a message before it reaches the detector (a message adapter) call
+        this too, so every drop is counted and blocks releases for ``corrupt_holdoff_s``. A
+        dropped audio chunk restarts the audio stream, so the samples on either side of the hole
+        are never joined into one frame.
+        """
+        self.counts[f'{kind}_dropped'] += 1
+        if kind == 'audio':
+            self.extractor.audio.reset()
+        message = f'{kind} message dropped: {reason}'
+        self.last_error = message
+        if stamp is not None and math.isfinite(stamp):
+            self._holdoff_until = max(self._holdoff_until,
+                                      stamp + self.settings.corrupt_holdoff_s)
+        elif self.latest_audio_t is not None:
+            self._holdoff_until = max(self._holdoff_until, self.latest_audio_t
+                                      + self.settings.corrupt_holdoff_s)
+        return Decisions.empty(error=message)
+
+    def _decide(self, frames: FeatureFrames, now: Optional[float]) -> Decisions:
+        n = len(frames)
+        self.counts['audio_restarts'] = self.extractor.audio.restarts
+        self.counts['wrench_restarts'] = self.extractor.ft.restarts
+        if n == 0:
+            return Decisions.empty()
+        valid = frames.valid.copy()
+        if now is not None:
+            stale = (now - frames.t) > self.settings.max_input_delay_s
+            self.counts['stale_frames'] += int(stale.sum())
+            valid &= ~stale
+        p = np.zeros(n)
+        if valid.any():
+            rows = frames.x[valid]
+            p[valid] = (self.forest.predict_proba(rows) if rows.shape[0] > 1
+                        else self.forest.predict_one(rows[0]))
+        if self._warm_until is None:
+            self._warm_until = float(frames.t[0]) + self.settings.warmup_s
+        blocked = (frames.t < self._warm_until) | (frames.t < self._holdoff_until)
+        contact, releases = self.logic.step(t=frames.t, p=p, valid=valid, blocked=blocked)
+        self.counts['frames'] += n
+        self.counts['invalid_frames'] += int(n - valid.sum())
+        self.counts['events'] = self.logic.events
+        self.counts['releases'] = self.logic.releases
+        return Decisions(t=frames.t, p=p, contact=contact, valid=valid, releases=releases,
+                         events=list(self.logic.last_events))
+
+    def with_rule(self, rule: DecisionRule) -> 'ContactDetector':
+        """Return a fresh detector with the same model and another decision rule."""
+        return ContactDetector(bundle=self.bundle, settings=replace(self.settings, rule=rule))

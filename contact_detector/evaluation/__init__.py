@@ -1,0 +1,1 @@
+"""Event metrics and baseline detectors, shared by evaluate, train and the sweep."""

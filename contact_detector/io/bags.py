@@ -1,0 +1,292 @@
+"""
+Shared rosbag2 helpers: finding bags, reading messages, ground truth and manifests.
+
+Messages are deserialised with rosbags' ROS 2 Jazzy typestore, extended with every message
+definition embedded in the bag (rosbag2 since Iron stores them; rosbags' AnyReader reads them),
+so non-standard types such as ``audio_common_msgs/msg/AudioData`` decode without their package.
+Deserialised messages have the same field names as rclpy messages (``header.stamp.sec``,
+``wrench.force.x``, array fields as numpy arrays), so one set of message -> array adapters
+serves recorded bags and the live node.
+"""
+
+from contextlib import contextmanager
+import json
+from pathlib import Path
+from typing import Any, Iterator, NamedTuple, Sequence
+
+import numpy as np
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import get_typestore, Stores
+
+from contact_detector.errors import BagError
+
+#: Topic and type names written by the simulator and read by the tools.
+WRENCH_TOPIC = '/wrist_wrench'
+AUDIO_TOPIC = '/audio'
+TRUTH_TOPIC = '/contact_truth'
+WRENCH_TYPE = 'geometry_msgs/msg/WrenchStamped'
+AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
+TRUTH_TYPE = 'std_msgs/msg/Bool'
+MANIFEST_NAME = 'manifest.json'
+
+_TYPESTORE = None
+
+
+def jazzy_typestore():
+    """Return the (cached) rosbags typestore with ROS 2 Jazzy's standard message types."""
+    global _TYPESTORE
+    if _TYPESTORE is None:
+        _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+    return _TYPESTORE
+
+
+class BagMessage(NamedTuple):
+    """One deserialised message: topic, type name, bag log time (ns) and the message."""
+
+    topic: str
+    msgtype: str
+    log_time_ns: int
+    msg: Any
+
+
+def is_bag_dir(path: Path) -> bool:
+    """Return True if ``path`` is a rosbag2 directory (contains ``metadata.yaml``)."""
+    return path.is_dir() and (path / 'metadata.yaml').is_file()
+
+
+def find_bags(paths: Sequence[str | Path]) -> list[Path]:
+    """
+    Resolve bag paths.
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        Each is a bag directory (has ``metadata.yaml``), a directory whose direct
+        subdirectories are bags, or a bag's storage file (``.db3`` / ``.mcap``, meaning its
+        directory).
+
+    Returns
+    -------
+    list of Path
+        Bag directories; a directory of bags contributes its bags sorted by name. Argument
+        order is kept; duplicates are dropped.
+
+    Raises
+    ------
+    BagError
+        A path does not exist or holds no bag, or no bag was found at all.
+
+    """
+    out: list[Path] = []
+    for item in paths:
+        path = Path(item)
+        if not path.exists():
+            raise BagError(f'no such bag or directory: {path}')
+        if path.is_file() and path.suffix in ('.db3', '.mcap') and is_bag_dir(path.parent):
+            found = [path.parent]
+        elif is_bag_dir(path):
+            found = [path]
+        elif path.is_dir():
+            found = sorted(p for p in path.iterdir() if is_bag_dir(p))
+            if not found:
+                raise BagError(f'{path} is neither a rosbag2 directory (no metadata.yaml) '
+                               'nor a directory of rosbag2 directories')
+        else:
+            raise BagError(f'{path} is not a rosbag2 directory')
+        for bag in found:
+            if bag not in out:
+                out.append(bag)
+    if not out:
+        raise BagError('no bag given')
+    return out
+
+
+def _complete_typestore(reader: AnyReader) -> None:
+    """Add Jazzy's types that the bag did not embed (AnyReader uses only the embedded ones)."""
+    jazzy = jazzy_typestore()
+    have = set(reader.typestore.fielddefs)
+    missing = {name: defs for name, defs in jazzy.fielddefs.items() if name not in have}
+    if missing and any(c.msgtype not in have for c in reader.connections):
+        reader.typestore.register(missing)
+
+
+@contextmanager
+def open_reader(path: str | Path) -> Iterator[AnyReader]:
+    """
+    Open a rosbag2 directory with rosbags' :class:`AnyReader`.
+
+    Use as ``with open_reader(path) as reader: ...``. The reader's typestore holds the bag's
+    embedded definitions plus the Jazzy standard types.
+
+    Raises
+    ------
+    BagError
+        The bag is missing, unreadable or corrupt.
+
+    """
+    path = Path(path)
+    if not is_bag_dir(path):
+        raise BagError(f'{path} is not a rosbag2 directory (no metadata.yaml)')
+    try:
+        reader = AnyReader([path], default_typestore=jazzy_typestore())
+        reader.open()
+    except Exception as err:  # rosbags raises several unrelated types for bad bags
+        raise BagError(f'cannot open bag {path}: {err}') from err
+    try:
+        _complete_typestore(reader)
+        yield reader
+    finally:
+        reader.close()
+
+
+def iter_messages(path: Path, *, topics: Sequence[str] | None = None) -> Iterator[BagMessage]:
+    """
+    Yield the messages of a bag in log-time order.
+
+    Parameters
+    ----------
+    path : Path
+        rosbag2 directory.
+    topics : sequence of str or None
+        Only these topics (all if None). Topics missing from the bag are ignored.
+
+    Yields
+    ------
+    BagMessage
+
+    Raises
+    ------
+    BagError
+        The bag cannot be opened, or a message cannot be deserialised (e.g. its type is
+        neither embedded in the bag nor a Jazzy standard type).
+
+    """
+    with open_reader(path) as reader:
+        conns = [c for c in reader.connections if topics is None or c.topic in topics]
+        if not conns:
+            return
+        try:
+            for conn, log_ns, raw in reader.messages(connections=conns):
+                try:
+                    msg = reader.deserialize(raw, conn.msgtype)
+                except Exception as err:
+                    raise BagError(f'{path}: cannot deserialise {conn.topic} '
+                                   f'({conn.msgtype}): {err}') from err
+                yield BagMessage(conn.topic, conn.msgtype, int(log_ns), msg)
+        except BagError:
+            raise
+        except Exception as err:
+            raise BagError(f'{path}: error while reading messages: {err}') from err
+
+
+def topic_types(path: Path) -> dict[str, str]:
+    """Topic name -> message type of a bag."""
+    with open_reader(path) as reader:
+        return {c.topic: c.msgtype for c in reader.connections}
+
+
+def read_truth(path: Path, *, topic: str = TRUTH_TOPIC) -> list[tuple[float, bool]]:
+    """
+    Ground-truth edges from ``/contact_truth`` (std_msgs/Bool).
+
+    Returns
+    -------
+    list of (float, bool)
+        ``(log time in s, value)`` in time order: True at each true contact onset, False where
+        the labelled onset window ends. Empty if the bag has no such topic (recorded bags).
+
+    """
+    return [(m.log_time_ns * 1e-9, bool(m.msg.data)) for m in iter_messages(path, topics=[topic])]
+
+
+class WrenchSeries(NamedTuple):
+    """Wrench samples of one topic: header stamps (s), force (n, 3) N, torque (n, 3) N m."""
+
+    t: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    frame_id: str
+
+
+def read_wrench(path: Path, *, topic: str = WRENCH_TOPIC) -> WrenchSeries:
+    """Read a geometry_msgs/WrenchStamped topic into arrays (stamps from the headers)."""
+    t, f, q = [], [], []
+    frame = ''
+    for m in iter_messages(path, topics=[topic]):
+        st = m.msg.header.stamp
+        t.append(st.sec + st.nanosec * 1e-9)
+        w = m.msg.wrench
+        f.append((w.force.x, w.force.y, w.force.z))
+        q.append((w.torque.x, w.torque.y, w.torque.z))
+        frame = m.msg.header.frame_id
+    if not t:
+        raise BagError(f'{path}: no messages on {topic}')
+    return WrenchSeries(np.asarray(t), np.asarray(f, dtype=float).reshape(-1, 3),
+                        np.asarray(q, dtype=float).reshape(-1, 3), frame)
+
+
+class AudioSeries(NamedTuple):
+    """Concatenated audio chunks: samples, chunk end indices (exclusive), chunk log times (s)."""
+
+    samples: np.ndarray
+    chunk_ends: np.ndarray
+    log_t: np.ndarray
+
+    def t0(self, rate: float) -> float:
+        """
+        Time of sample 0, estimated from the log times: ``min_k(log_t[k] - (end_k - 1)/rate)``.
+
+        Log time = time of a chunk's last sample + transport delay (>= 0), so the lower envelope
+        is the best estimate without stamps.
+        """
+        return float(np.min(self.log_t - (self.chunk_ends - 1) / rate))
+
+
+def read_audio(path: Path, *, topic: str = AUDIO_TOPIC) -> AudioSeries:
+    """Read an Int16MultiArray (or any message with an int ``data`` array) audio topic."""
+    chunks, log_t = [], []
+    for m in iter_messages(path, topics=[topic]):
+        chunks.append(np.asarray(m.msg.data).astype(np.int16, copy=False).ravel())
+        log_t.append(m.log_time_ns * 1e-9)
+    if not chunks:
+        raise BagError(f'{path}: no messages on {topic}')
+    ends = np.cumsum([len(c) for c in chunks]).astype(np.int64)
+    return AudioSeries(np.concatenate(chunks), ends, np.asarray(log_t))
+
+
+def read_manifest(path: str | Path) -> dict:
+    """
+    Load a simulator manifest.
+
+    Parameters
+    ----------
+    path : str or Path
+        The directory holding ``manifest.json`` or the file itself.
+
+    Raises
+    ------
+    BagError
+        Missing, not JSON, or not a manifest (no 'trials' list).
+
+    """
+    path = Path(path)
+    file = path / MANIFEST_NAME if path.is_dir() else path
+    try:
+        data = json.loads(file.read_text(encoding='utf-8'))
+    except (OSError, ValueError) as err:
+        raise BagError(f'cannot read manifest {file}: {err}') from err
+    if not isinstance(data, dict) or not isinstance(data.get('trials'), list):
+        raise BagError(f'{file} is not a simulator manifest (no "trials" list)')
+    return data
+
+
+def manifest_entry(bag: str | Path) -> dict | None:
+    """Return the entry of ``bag`` in the ``manifest.json`` beside it, or None."""
+    bag = Path(bag)
+    file = bag.parent / MANIFEST_NAME
+    if not file.is_file():
+        return None
+    for trial in read_manifest(file)['trials']:
+        if trial.get('bag') == bag.name or trial.get('name') == bag.name:
+            return trial
+    return None

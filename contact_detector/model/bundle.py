@@ -1,0 +1,725 @@
+"""The model bundle: a trained forest plus everything needed to use it correctly.
+
+A bundle is saved as two or three files side by side::
+
+    contact_forest.joblib      the model file (joblib pickle, or ``.skops``)
+    contact_forest.card.json   the model card: all metadata + SHA-256 of the model file
+    contact_forest.card.md     the same card rendered for humans
+
+The model file holds ``{'payload_version': 1, 'forest': <RandomForestClassifier>,
+'metadata': {...}}`` where ``metadata`` is plain JSON (feature config, feature names, schema
+version, label window, decision rule, versions, training summary, metrics, creation time).
+The card repeats ``metadata`` and adds the hash, so :func:`load_bundle` can check a joblib
+file **before** unpickling it (unpickling runs code) and can refuse an incompatible model
+without touching it. See ``docs/model.md``.
+"""
+
+import dataclasses
+from dataclasses import dataclass, field
+from datetime import datetime
+import functools
+import hashlib
+import json
+import math
+import os
+from pathlib import Path
+import pickle
+import platform
+import sys
+from typing import Any, Dict, Mapping, Optional, Sequence
+import warnings
+import zipfile
+
+import joblib
+import numpy as np
+import sklearn
+from sklearn.ensemble import RandomForestClassifier
+
+import contact_detector
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.model.compiled_forest import (CompiledForest, DEFAULT_CODEGEN_DEPTH,
+                                                    forest_content_sha256)
+
+#: Version of the payload dict inside model files and of the card layout.
+PAYLOAD_VERSION = 1
+CARD_VERSION = 1
+#: File name of the shipped model (in ``<share>/contact_detector/models/``).
+DEFAULT_MODEL_NAME = 'contact_forest.joblib'
+FORMATS = {'.joblib': 'joblib', '.skops': 'skops'}
+#: Pickle protocol of joblib files, fixed so that the same forest gives the same bytes.
+JOBLIB_PROTOCOL = 4
+#: zlib level of joblib files: ~4x smaller than raw for deep trees, deterministic.
+JOBLIB_COMPRESS = ('zlib', 3)
+
+_RETRAIN = 'retrain with `contact-detector train`'
+_METADATA_KEYS = ('feature_config', 'feature_names', 'feature_schema_version', 'label_window',
+                  'decision_rule', 'versions', 'training', 'metrics', 'created')
+
+#: Types a skops model file may contain (fully qualified names). Anything else is refused.
+SKOPS_ALLOWED_TYPES = frozenset({
+    'builtins.dict', 'builtins.list', 'builtins.tuple', 'builtins.str', 'builtins.int',
+    'builtins.float', 'builtins.bool', 'builtins.NoneType',
+    'numpy.ndarray', 'numpy.dtype', 'numpy.int64', 'numpy.int32', 'numpy.intp',
+    'numpy.float64', 'numpy.float32', 'numpy.bool_', 'numpy.bool',
+    'numpy.random.mtrand.RandomState', 'numpy.random._mt19937.MT19937',
+    'sklearn.ensemble._forest.RandomForestClassifier',
+    'sklearn.tree._classes.DecisionTreeClassifier',
+    'sklearn.tree._tree.Tree',
+})
+
+
+# ---------------------------------------------------------------------------- decision rule
+
+@dataclass(frozen=True)
+class DecisionRule:
+    """
+    How per-frame probabilities become contact events (applied by the detection layer).
+
+    Attributes
+    ----------
+    threshold : float
+        Contact when P(contact) >= ``threshold``, in [0, 1].
+    confirm_frames : int
+        Consecutive frames at or above the threshold needed to report a contact, >= 1.
+    refractory_s : float
+        Seconds after a reported contact during which no new one is reported, >= 0.
+
+    """
+
+    threshold: float = 0.5
+    confirm_frames: int = 1
+    refractory_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
+        for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value) or not low <= value <= high:
+                raise ConfigError(f'DecisionRule.{name} must be a finite number in '
+                                  f'[{low}, {high}], got {value!r}')
+            object.__setattr__(self, name, float(value))
+        value = self.confirm_frames
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ConfigError(f'DecisionRule.confirm_frames must be an int >= 1, got {value!r}')
+        object.__setattr__(self, 'confirm_frames', int(value))
+
+    def to_dict(self) -> dict:
+        """Plain-JSON form, stored in bundles and cards."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> 'DecisionRule':
+        """Inverse of :meth:`to_dict`; unknown keys are a :class:`ConfigError`."""
+        if not isinstance(data, Mapping):
+            raise ConfigError(f'DecisionRule must be a mapping, got {type(data).__name__}')
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ConfigError(f'unknown DecisionRule keys: {unknown} (known: {sorted(known)})')
+        return cls(**dict(data))
+
+
+# ---------------------------------------------------------------------------- helpers
+
+def runtime_versions() -> Dict[str, str]:
+    """Versions recorded in a new bundle: contact_detector, scikit-learn, numpy, python."""
+    return {'contact_detector': contact_detector.__version__,
+            'scikit-learn': sklearn.__version__,
+            'numpy': np.__version__,
+            'python': platform.python_version()}
+
+
+def _plain(value: Any, where: str) -> Any:
+    """Return ``value`` as plain JSON types; non-finite floats become None."""
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, Mapping):
+        out = {}
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise ModelError(f'{where}: keys must be strings, got {key!r}')
+            out[key] = _plain(item, f'{where}.{key}')
+        return out
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(item, f'{where}[{i}]') for i, item in enumerate(value)]
+    raise ModelError(f'{where}: {type(value).__name__} cannot be stored in a model card '
+                     '(use str, int, float, bool, None, lists and dicts)')
+
+
+def _major_minor(version: str) -> str:
+    """'1.9.1' -> '1.9'."""
+    return '.'.join(str(version).split('.')[:2])
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, 'rb') as stream:
+        for block in iter(functools.partial(stream.read, 1 << 20), b''):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def card_paths(path: Path) -> tuple:
+    """Return ``(card_json, card_md)`` beside the model file ``path``."""
+    path = Path(path)
+    return (path.with_name(path.stem + '.card.json'), path.with_name(path.stem + '.card.md'))
+
+
+def _forest_problem(forest: Any, n_features: int) -> Optional[str]:
+    """Describe what is wrong with ``forest`` as the bundle's classifier, or None."""
+    if not isinstance(forest, RandomForestClassifier):
+        return f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier'
+    if not getattr(forest, 'estimators_', None):
+        return 'the RandomForestClassifier is not fitted'
+    classes = np.asarray(forest.classes_).tolist()
+    if forest.n_outputs_ != 1 or classes != [0, 1]:
+        return f'the forest must have classes [0, 1] (1 = contact), it has {classes}'
+    if forest.n_features_in_ != n_features:
+        return (f'the forest expects {forest.n_features_in_} features but the bundle names '
+                f'{n_features}')
+    return None
+
+
+# ---------------------------------------------------------------------------- the bundle
+
+@dataclass(kw_only=True, eq=False)
+class ModelBundle:
+    """
+    A trained contact classifier with the contract it was trained under.
+
+    Attributes
+    ----------
+    forest : sklearn.ensemble.RandomForestClassifier
+        Fitted, classes ``[0, 1]`` (1 = contact), ``n_features_in_ == len(feature_names)``.
+    feature_config : FeatureConfig
+        The feature configuration the training data was computed with.
+    feature_names : tuple of str
+        Column names; must equal ``feature_config.feature_names``.
+    feature_schema_version : int
+        :data:`~contact_detector.features.config.FEATURE_SCHEMA_VERSION` at training time.
+    label_window : dict
+        How frames were labelled, e.g. ``{'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1}``.
+    decision_rule : DecisionRule
+        Threshold and event logic chosen on validation data.
+    versions : dict
+        Library versions at training time (see :func:`runtime_versions`).
+    training : dict
+        Summary of the training data (counts, sources, split, n_estimators search, ...).
+    metrics : dict
+        Validation / test metrics.
+    created : str
+        ISO 8601 creation time, passed in by the caller (the library never reads the clock).
+
+    Notes
+    -----
+    Dict fields are normalised to plain JSON types (tuples become lists, numpy scalars Python
+    numbers, NaN/Inf None), exactly as they are stored. Bundles compare by identity.
+
+    """
+
+    forest: Any
+    feature_config: FeatureConfig
+    feature_names: tuple
+    feature_schema_version: int
+    label_window: dict
+    decision_rule: DecisionRule = field(default_factory=DecisionRule)
+    versions: dict
+    training: dict = field(default_factory=dict)
+    metrics: dict = field(default_factory=dict)
+    created: str
+
+    def __post_init__(self) -> None:
+        """Validate the bundle's consistency; raise :class:`ModelError` saying what is wrong."""
+        if not isinstance(self.feature_config, FeatureConfig):
+            raise ModelError('ModelBundle.feature_config must be a FeatureConfig, got '
+                             f'{type(self.feature_config).__name__}')
+        if not isinstance(self.decision_rule, DecisionRule):
+            raise ModelError('ModelBundle.decision_rule must be a DecisionRule, got '
+                             f'{type(self.decision_rule).__name__}')
+        self.feature_names = tuple(self.feature_names)
+        if self.feature_names != self.feature_config.feature_names:
+            raise ModelError(f'ModelBundle.feature_names {list(self.feature_names)} differ from '
+                             'the names the feature config produces, '
+                             f'{list(self.feature_config.feature_names)}')
+        version = self.feature_schema_version
+        if isinstance(version, bool) or not isinstance(version, (int, np.integer)):
+            raise ModelError(f'ModelBundle.feature_schema_version must be an int, got {version!r}')
+        self.feature_schema_version = int(version)
+        for name in ('label_window', 'versions', 'training', 'metrics'):
+            value = getattr(self, name)
+            if not isinstance(value, Mapping):
+                raise ModelError(f'ModelBundle.{name} must be a dict, got {type(value).__name__}')
+            setattr(self, name, _plain(value, name))
+        try:
+            datetime.fromisoformat(self.created)
+        except (TypeError, ValueError) as err:
+            raise ModelError(f'ModelBundle.created must be an ISO 8601 time string, got '
+                             f'{self.created!r}') from err
+        problem = _forest_problem(self.forest, len(self.feature_names))
+        if problem:
+            raise ModelError(f'invalid ModelBundle: {problem}')
+
+    @property
+    def n_estimators(self) -> int:
+        """Number of trees."""
+        return len(self.forest.estimators_)
+
+    @functools.cached_property
+    def forest_sha256(self) -> str:
+        """SHA-256 of the trees' structure and leaf values, independent of the file format."""
+        return forest_content_sha256(self.forest)
+
+    @property
+    def model_id(self) -> str:
+        """
+        Short identifier for logs and diagnostics: ``rf<trees>-<feature set>-<hash>``.
+
+        E.g. ``rf8-paper7-3fa2c1d09b``, or ``rf8-paper7+force_delta-...`` with extra features.
+        The hash is :attr:`forest_sha256`, so the joblib and skops files of one forest share
+        the id.
+        """
+        feature_set = '+'.join(('paper7',) + tuple(self.feature_config.extra_features))
+        return f'rf{self.n_estimators}-{feature_set}-{self.forest_sha256[:10]}'
+
+    def metadata(self) -> dict:
+        """Everything except the forest, as plain JSON (stored in the file and the card)."""
+        return {
+            'feature_config': self.feature_config.to_dict(),
+            'feature_names': list(self.feature_names),
+            'feature_schema_version': self.feature_schema_version,
+            'label_window': _plain(self.label_window, 'label_window'),
+            'decision_rule': self.decision_rule.to_dict(),
+            'versions': _plain(self.versions, 'versions'),
+            'training': _plain(self.training, 'training'),
+            'metrics': _plain(self.metrics, 'metrics'),
+            'created': self.created,
+        }
+
+    def feature_importances(self) -> Dict[str, float]:
+        """Mean decrease in impurity per feature name (sums to 1), as in the paper's Fig. 7."""
+        return {name: float(value)
+                for name, value in zip(self.feature_names, self.forest.feature_importances_)}
+
+    def compile(self, *, codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> CompiledForest:
+        """Return a :class:`CompiledForest` of the forest (about 1.5 s for 8 x 20k nodes)."""
+        return CompiledForest.from_sklearn(self.forest, codegen_depth=codegen_depth)
+
+
+# ---------------------------------------------------------------------------- the card
+
+def _forest_summary(forest: RandomForestClassifier) -> dict:
+    params = {}
+    for name, value in sorted(forest.get_params().items()):
+        if name == 'estimator' or '__' in name:
+            continue
+        params[name] = value if value is None or isinstance(value, (bool, int, float, str)) \
+            else repr(value)
+    trees = [estimator.tree_ for estimator in forest.estimators_]
+    return {'params': params,
+            'tree_node_counts': [int(tree.node_count) for tree in trees],
+            'tree_max_depths': [int(tree.max_depth) for tree in trees],
+            'tree_leaf_counts': [int(tree.n_leaves) for tree in trees]}
+
+
+def build_card(*, bundle: ModelBundle, model_path: Path, fmt: str) -> dict:
+    """
+    Return the model card of ``bundle`` saved at ``model_path`` (which must exist).
+
+    Returns
+    -------
+    dict
+        ``card_version``, ``model_file``, ``format``, ``sha256``, ``size_bytes``,
+        ``model_id``, ``forest_sha256``, ``n_estimators``, ``feature_importances`` (name ->
+        importance), ``forest`` (parameters and tree sizes) and every key of
+        :meth:`ModelBundle.metadata`.
+
+    """
+    card = {'card_version': CARD_VERSION,
+            'model_file': Path(model_path).name,
+            'format': fmt,
+            'sha256': _sha256(Path(model_path)),
+            'size_bytes': Path(model_path).stat().st_size,
+            'model_id': bundle.model_id,
+            'forest_sha256': bundle.forest_sha256,
+            'n_estimators': bundle.n_estimators,
+            'feature_importances': bundle.feature_importances(),
+            'forest': _forest_summary(bundle.forest)}
+    card.update(bundle.metadata())
+    return _plain(card, 'card')
+
+
+def _md_value(value: Any) -> str:
+    if isinstance(value, float):
+        return f'{value:.6g}'
+    if isinstance(value, (dict, list)):
+        return '`' + json.dumps(value, sort_keys=True) + '`'
+    return f'`{value}`' if isinstance(value, str) else str(value)
+
+
+def _md_table(rows: Mapping[str, Any], header: tuple = ('key', 'value')) -> list:
+    lines = [f'| {header[0]} | {header[1]} |', '|---|---|']
+    lines += [f'| {key} | {_md_value(value)} |' for key, value in rows.items()]
+    return lines + ['']
+
+
+def render_card_markdown(card: Mapping[str, Any]) -> str:
+    """Render a card dict (see :func:`build_card`) as Markdown."""
+    importances = sorted(card['feature_importances'].items(), key=lambda kv: -kv[1])
+    forest = card['forest']
+    lines = [f'# Model card: {card["model_id"]}', '',
+             f'Model file `{card["model_file"]}` ({card["format"]}, {card["size_bytes"]} bytes), '
+             f'created {card["created"]}.', '',
+             f'- SHA-256 of the model file: `{card["sha256"]}`',
+             f'- Forest content hash: `{card["forest_sha256"]}`',
+             f'- Trees: {card["n_estimators"]}, nodes per tree {forest["tree_node_counts"]}, '
+             f'depths {forest["tree_max_depths"]}',
+             f'- Feature schema version: {card["feature_schema_version"]}', '',
+             'Loading checks the SHA-256 above before unpickling, then the feature schema '
+             'version, the feature names and configuration, and the scikit-learn version '
+             '(see docs/model.md).', '',
+             '## Features and importances', '',
+             '| feature | importance |', '|---|---|']
+    lines += [f'| {name} | {value:.4f} |' for name, value in importances]
+    lines += ['', '## Feature configuration', '']
+    lines += _md_table(card['feature_config'])
+    lines += ['## Labels and decision rule', '']
+    lines += _md_table({'label_window': card['label_window'], **card['decision_rule']})
+    for title, key in (('Metrics', 'metrics'), ('Training data', 'training'),
+                       ('Versions', 'versions')):
+        lines += [f'## {title}', '']
+        lines += _md_table(card[key]) if card[key] else ['(none)', '']
+    lines += ['## Forest parameters', '']
+    lines += _md_table(forest['params'])
+    return '\n'.join(lines)
+
+
+# ---------------------------------------------------------------------------- save / load
+
+def _replace_atomically(*, data_writer: Any, path: Path) -> None:
+    """Write with ``data_writer(tmp_path)`` then rename over ``path``."""
+    tmp = path.with_name(f'.{path.name}.tmp')
+    try:
+        data_writer(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path:
+    """
+    Save ``bundle`` as a model file plus its card (``.card.json`` and ``.card.md``).
+
+    Parameters
+    ----------
+    bundle : ModelBundle
+        The bundle to save.
+    path : Path
+        Model file path; its suffix must match ``fmt`` (``.joblib`` or ``.skops``). Parent
+        directories are created.
+    fmt : str
+        ``'joblib'`` (pickle protocol 4, zlib level 3: the same forest gives the same bytes)
+        or ``'skops'`` (no code runs on load; see docs/model.md).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ConfigError
+        Unknown ``fmt`` or a suffix that does not match it.
+    ModelError
+        The bundle cannot be written.
+
+    """
+    path = Path(path)
+    if fmt not in FORMATS.values():
+        raise ConfigError(f'unknown model format {fmt!r}; use one of {sorted(FORMATS.values())}')
+    if FORMATS.get(path.suffix) != fmt:
+        raise ConfigError(f'a {fmt} model file must end in .{fmt}, got {path.name!r}')
+    if not isinstance(bundle, ModelBundle):
+        raise ModelError(f'save_bundle needs a ModelBundle, got {type(bundle).__name__}')
+    card_json, card_md = card_paths(path)
+    others = [path.with_suffix(suffix) for suffix in FORMATS if suffix != path.suffix]
+    clash = [other.name for other in others if other.exists()]
+    if clash:
+        raise ConfigError(f'{clash[0]} already sits beside {path.name} and owns the card '
+                          f'{card_json.name}; save the {fmt} file under another name')
+    payload = {'payload_version': PAYLOAD_VERSION, 'forest': bundle.forest,
+               'metadata': bundle.metadata()}
+    if fmt == 'joblib':
+        def writer(tmp: Path) -> None:
+            joblib.dump(payload, tmp, compress=JOBLIB_COMPRESS, protocol=JOBLIB_PROTOCOL)
+    else:
+        skops_io = _import_skops()
+
+        def writer(tmp: Path) -> None:
+            skops_io.dump(payload, tmp, compression=zipfile.ZIP_DEFLATED, compresslevel=3)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _replace_atomically(data_writer=writer, path=path)
+        card = build_card(bundle=bundle, model_path=path, fmt=fmt)
+        _replace_atomically(
+            data_writer=lambda tmp: tmp.write_text(json.dumps(card, indent=2) + '\n'),
+            path=card_json)
+        _replace_atomically(data_writer=lambda tmp: tmp.write_text(render_card_markdown(card)),
+                            path=card_md)
+    except (OSError, TypeError, ValueError, pickle.PicklingError) as err:
+        raise ModelError(f'cannot save model to {path}: {err}') from err
+    return path
+
+
+def _check_metadata(*, meta: Mapping[str, Any], source: str,
+                    expected_config: Optional[FeatureConfig]) -> FeatureConfig:
+    """Check a card's or payload's metadata against the running code; return its config."""
+    missing = [key for key in _METADATA_KEYS if key not in meta]
+    if missing:
+        raise ModelError(f'{source} lacks {missing}; it was not written by save_bundle; '
+                         f'{_RETRAIN}')
+    schema = meta['feature_schema_version']
+    if schema != FEATURE_SCHEMA_VERSION:
+        raise ModelError(f'{source} was trained on feature schema version {schema}, but this '
+                         f'contact_detector computes schema version {FEATURE_SCHEMA_VERSION} '
+                         f'(the features changed meaning); {_RETRAIN}')
+    saved = str(meta['versions'].get('scikit-learn', 'unknown'))
+    if _major_minor(saved) != _major_minor(sklearn.__version__):
+        raise ModelError(f'{source} was saved with scikit-learn {saved} but scikit-learn '
+                         f'{sklearn.__version__} is installed; forests are only loaded by the '
+                         f'same major.minor version. Either {_RETRAIN} under scikit-learn '
+                         f'{sklearn.__version__}, or install scikit-learn '
+                         f'{_major_minor(saved)}.x')
+    try:
+        config = FeatureConfig.from_dict(meta['feature_config'])
+    except ConfigError as err:
+        raise ModelError(f'{source} has a feature configuration this contact_detector cannot '
+                         f'use ({err}); {_RETRAIN}') from err
+    names = tuple(meta['feature_names'])
+    if names != config.feature_names:
+        raise ModelError(f'{source} names features {list(names)} but its feature configuration '
+                         f'produces {list(config.feature_names)}; the model does not match the '
+                         f'feature code; {_RETRAIN}')
+    if expected_config is not None and config != expected_config:
+        diffs = [f'{f.name} (model {getattr(config, f.name)!r}, expected '
+                 f'{getattr(expected_config, f.name)!r})'
+                 for f in dataclasses.fields(FeatureConfig)
+                 if getattr(config, f.name) != getattr(expected_config, f.name)]
+        raise ModelError(f'{source} was trained with a different feature configuration: '
+                         f'{"; ".join(diffs)}. Use the model\'s configuration for the features, '
+                         f'or {_RETRAIN} with the expected one')
+    return config
+
+
+def _skops_types(path: Path) -> set:
+    """All ``module.Class`` names in a skops file's schema."""
+    with zipfile.ZipFile(path) as archive:
+        schema = json.loads(archive.read('schema.json'))
+    found = set()
+    stack = [schema]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, dict):
+            if isinstance(item.get('__class__'), str) and isinstance(item.get('__module__'), str):
+                found.add(f'{item["__module__"]}.{item["__class__"]}')
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+    return found
+
+
+def _import_skops() -> Any:
+    try:
+        import skops.io
+    except ImportError as err:
+        raise ModelError('the skops format needs the skops package: pip install skops (the '
+                         '"safe" extra of contact_detector), or use the joblib format') from err
+    return skops.io
+
+
+def _read_payload(*, path: Path, fmt: str, trusted_skops_types: Sequence[str]) -> Any:
+    """Deserialise a (hash-checked) model file; wrap every failure in ModelError."""
+    from sklearn.exceptions import InconsistentVersionWarning
+    skops_io = _import_skops() if fmt == 'skops' else None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter('error', InconsistentVersionWarning)
+            if fmt == 'joblib':
+                return joblib.load(path)
+            allowed = SKOPS_ALLOWED_TYPES | set(trusted_skops_types)
+            untrusted = set(skops_io.get_untrusted_types(file=path))
+            refused = sorted((untrusted | _skops_types(path)) - allowed)
+            if refused:
+                raise ModelError(f'skops model file {path} contains types outside the '
+                                 f'allow-list: {refused}; it was not loaded. If you trust '
+                                 'the file, pass them in trusted_skops_types')
+            return skops_io.load(path, trusted=sorted(untrusted))
+    except ModelError:
+        raise
+    except InconsistentVersionWarning as err:
+        raise ModelError(f'model file {path} was pickled by another scikit-learn version '
+                         f'({err}); {_RETRAIN}') from err
+    except Exception as err:  # any unpickling failure means a bad model file
+        raise ModelError(f'cannot read {fmt} model file {path}: {type(err).__name__}: {err}; '
+                         f'the file is corrupt or not a contact_detector model; '
+                         f'{_RETRAIN}') from err
+
+
+def load_bundle(*, path: Path, expected_config: Optional[FeatureConfig] = None,
+                verify_hash: bool = True, trusted_skops_types: Sequence[str] = ()
+                ) -> ModelBundle:
+    """
+    Load a model file saved by :func:`save_bundle`, refusing anything that does not fit.
+
+    Order of checks (each failure is a :class:`ModelError` saying what to do):
+
+    1. the model file and its ``<stem>.card.json`` exist; the suffix names the format;
+    2. the file's SHA-256 equals the card's (skipped if ``verify_hash`` is False), *before*
+       the file is deserialised, since unpickling a joblib file runs code;
+    3. from the card, still before deserialising: feature schema version equals
+       :data:`FEATURE_SCHEMA_VERSION`, feature names equal the card's
+       ``feature_config.feature_names``, the config equals ``expected_config`` (differing
+       fields named), scikit-learn major.minor equals the running one;
+    4. skops only: every type in the file is in :data:`SKOPS_ALLOWED_TYPES` or
+       ``trusted_skops_types``;
+    5. the file's own metadata equals the card's; the forest is a fitted
+       ``RandomForestClassifier`` with classes ``[0, 1]`` and ``len(feature_names)`` inputs.
+
+    Parameters
+    ----------
+    path : Path
+        ``.joblib`` or ``.skops`` model file.
+    expected_config : FeatureConfig, optional
+        The configuration the caller will compute features with.
+    verify_hash : bool
+        Compare the file's SHA-256 with the card (default). Only turn off for a file whose
+        provenance you know and whose card you cannot regenerate.
+    trusted_skops_types : sequence of str
+        Extra fully qualified type names accepted in a skops file.
+
+    Returns
+    -------
+    ModelBundle
+
+    """
+    path = Path(path)
+    fmt = FORMATS.get(path.suffix)
+    if fmt is None:
+        raise ModelError(f'model file {path} must end in .joblib or .skops')
+    if not path.is_file():
+        raise ModelError(f'model file {path} does not exist; pass an existing model or '
+                         f'{_RETRAIN}')
+    card_json, _ = card_paths(path)
+    if not card_json.is_file():
+        raise ModelError(f'model card {card_json} is missing; a model file is only loaded '
+                         'together with the card save_bundle writes beside it (it holds the '
+                         'SHA-256 checked before loading). Copy the card along with the model, '
+                         f'or {_RETRAIN}')
+    try:
+        card = json.loads(card_json.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        raise ModelError(f'model card {card_json} cannot be read: {err}') from err
+    if not isinstance(card, dict) or card.get('card_version') != CARD_VERSION \
+            or not isinstance(card.get('sha256'), str):
+        raise ModelError(f'model card {card_json} is not a version {CARD_VERSION} card with a '
+                         f'sha256; {_RETRAIN}')
+    if card.get('format') != fmt:
+        raise ModelError(f'model card {card_json} describes a {card.get("format")!r} file but '
+                         f'{path.name} is loaded as {fmt} (by its suffix)')
+    if verify_hash:
+        actual = _sha256(path)
+        if actual != card['sha256']:
+            raise ModelError(f'model file {path} has sha256 {actual}, which does not match its '
+                             f'card {card_json} ({card["sha256"]}): the file is corrupt or was '
+                             'modified, and it was NOT loaded. Restore the file that goes with '
+                             f'the card, or {_RETRAIN}')
+    card_source = f'model {path.name} (per its card)'
+    config = _check_metadata(meta=card, source=card_source, expected_config=expected_config)
+
+    payload = _read_payload(path=path, fmt=fmt, trusted_skops_types=trusted_skops_types)
+    if not isinstance(payload, dict) or payload.get('payload_version') != PAYLOAD_VERSION \
+            or not isinstance(payload.get('metadata'), dict) or 'forest' not in payload:
+        raise ModelError(f'model file {path} does not hold a version {PAYLOAD_VERSION} '
+                         f'contact_detector bundle; {_RETRAIN}')
+    meta = payload['metadata']
+    differing = [key for key in _METADATA_KEYS if meta.get(key) != card.get(key)]
+    if differing:
+        raise ModelError(f'model card {card_json} disagrees with model file {path.name} in '
+                         f'{differing}; the card must be the one save_bundle wrote with this '
+                         'file. Re-save the bundle to regenerate the card')
+    problem = _forest_problem(payload['forest'], len(config.feature_names))
+    if problem:
+        raise ModelError(f'model file {path}: {problem}; {_RETRAIN}')
+    try:
+        return ModelBundle(forest=payload['forest'], feature_config=config,
+                           feature_names=tuple(meta['feature_names']),
+                           feature_schema_version=meta['feature_schema_version'],
+                           label_window=meta['label_window'],
+                           decision_rule=DecisionRule.from_dict(meta['decision_rule']),
+                           versions=meta['versions'], training=meta['training'],
+                           metrics=meta['metrics'], created=meta['created'])
+    except ConfigError as err:
+        raise ModelError(f'model file {path} has invalid metadata: {err}; {_RETRAIN}') from err
+
+
+# ---------------------------------------------------------------------------- shipped model
+
+def _model_dirs() -> list:
+    """Directories searched for the shipped model, in order."""
+    dirs = []
+    try:
+        from ament_index_python.packages import get_package_share_directory
+    except ImportError:
+        pass
+    else:
+        try:
+            dirs.append(Path(get_package_share_directory('contact_detector')) / 'models')
+        except (LookupError, OSError, ValueError):
+            pass  # not installed in a sourced ROS workspace
+    dirs.append(Path(sys.prefix) / 'share' / 'contact_detector' / 'models')
+    dirs.append(Path(__file__).resolve().parents[2] / 'models')
+    return dirs
+
+
+def find_model(*, name: str = DEFAULT_MODEL_NAME, dirs: Sequence[Path]) -> Path:
+    """
+    Return the first ``<dir>/<name>`` that exists.
+
+    Raises
+    ------
+    ModelError
+        If none exists; the message lists the directories searched.
+
+    """
+    for directory in dirs:
+        candidate = Path(directory) / name
+        if candidate.is_file():
+            return candidate
+    searched = ', '.join(str(d) for d in dirs)
+    raise ModelError(f'no {name} found (searched {searched}); pass a model path, or '
+                     f'{_RETRAIN} and save it as models/{name}')
+
+
+def default_model_path() -> Path:
+    """
+    Path of the shipped model ``models/contact_forest.joblib``.
+
+    Searched in the ament share directory of ``contact_detector`` (if ament_index_python is
+    importable and the package is installed), then ``<sys.prefix>/share/contact_detector/
+    models/``, then the source checkout's ``models/``.
+
+    Raises
+    ------
+    ModelError
+        If no shipped model exists.
+
+    """
+    return find_model(dirs=_model_dirs())

@@ -1,0 +1,154 @@
+"""Choose defaults by measurement: feature settings x label windows x decision rules.
+
+Each feature setting is computed with the streaming core on every bag (decoded once), a forest
+is trained on the training trials, and its probabilities on the held-out trials are turned
+into releases by :class:`~contact_detector.detection.release.ReleaseLogic` for every decision
+rule, then scored by :mod:`contact_detector.evaluation.metrics`. The ``evaluate`` command
+re-measures the chosen defaults through the full detector.
+"""
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+from joblib import delayed, Parallel
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
+
+from contact_detector.detection.offline import run_features
+from contact_detector.detection.release import ReleaseLogic
+from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize, Truth)
+from contact_detector.features.config import FeatureConfig
+from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.training import LabelWindow
+
+
+@dataclass(frozen=True)
+class FeatureSetting:
+    """One point of the feature grid; ``columns`` selects a subset for ablations."""
+
+    name: str
+    config: FeatureConfig
+    label: LabelWindow
+    columns: Optional[tuple] = None
+
+
+@dataclass
+class TrialFrames:
+    """Valid frames of one trial under one feature setting."""
+
+    truth: Truth
+    t: np.ndarray
+    x: np.ndarray
+    t0: float
+
+
+@dataclass
+class SweepRow:
+    """Metrics of one (feature setting, rule) pair."""
+
+    setting: str
+    rule: str
+    summary: dict
+    precision: float
+    recall: float
+    extra: dict = field(default_factory=dict)
+
+
+def trial_frames(*, events, truth: Truth, config: FeatureConfig, audio_rate: float,
+                 wrench_rate: float) -> TrialFrames:
+    """Compute one trial's valid feature frames with the streaming core."""
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate,
+                                          ft_input_rate=wrench_rate)
+    frames = run_features(events, extractor=extractor)
+    t0 = float(frames.t[0]) if len(frames) else 0.0
+    return TrialFrames(truth=truth, t=frames.t[frames.valid], x=frames.x[frames.valid], t0=t0)
+
+
+def compute_frames(*, events_by_trial: Dict[str, tuple], config: FeatureConfig,
+                   audio_rate: float, wrench_rate: float, jobs: int) -> Dict[str, TrialFrames]:
+    """Feature frames of every trial; ``events_by_trial`` maps name -> (events, truth)."""
+    names = sorted(events_by_trial)
+    frames = Parallel(n_jobs=jobs)(
+        delayed(trial_frames)(events=events_by_trial[n][0], truth=events_by_trial[n][1],
+                              config=config, audio_rate=audio_rate, wrench_rate=wrench_rate)
+        for n in names)
+    return dict(zip(names, frames))
+
+
+def _columns(setting: FeatureSetting) -> np.ndarray:
+    names = setting.config.feature_names
+    if setting.columns is None:
+        return np.arange(len(names))
+    return np.array([names.index(c) for c in setting.columns])
+
+
+def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_estimators: int,
+               seed: int, jobs: int) -> RandomForestClassifier:
+    """Train the paper's forest on the given trials."""
+    cols = _columns(setting)
+    x = np.concatenate([f.x[:, cols] for f in frames])
+    y = np.concatenate([frame_labels(t=f.t, onsets=[f.truth.onset_t],
+                                     start_s=setting.label.start_s, end_s=setting.label.end_s)
+                        for f in frames])
+    forest = RandomForestClassifier(n_estimators=n_estimators, max_features='sqrt',
+                                    random_state=seed, n_jobs=jobs)
+    return forest.fit(x, y)
+
+
+def score_rules(*, forest: RandomForestClassifier, frames: Sequence[TrialFrames],
+                setting: FeatureSetting, rules: Sequence[DecisionRule],
+                warmup_s: float = 0.5) -> List[SweepRow]:
+    """Score every rule on held-out trials with one trained forest."""
+    cols = _columns(setting)
+    probs = [forest.predict_proba(f.x[:, cols])[:, 1] if f.x.shape[0] else np.zeros(0)
+             for f in frames]
+    labels = [frame_labels(t=f.t, onsets=[f.truth.onset_t], start_s=setting.label.start_s,
+                           end_s=setting.label.end_s) for f in frames]
+    y = np.concatenate(labels)
+    rows = []
+    for rule in rules:
+        outcomes = []
+        pred = []
+        for f, p in zip(frames, probs):
+            logic = ReleaseLogic(rule=rule, armed=True)
+            contact, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
+                                           blocked=f.t < f.t0 + warmup_s)
+            events = list(logic.last_events)
+            outcomes.append(score_trial(truth=f.truth, releases=releases, events=events))
+            pred.append(contact)
+        yp = np.concatenate(pred)
+        tp = int(np.sum(yp & (y == 1)))
+        precision = tp / max(1, int(yp.sum()))
+        recall = tp / max(1, int(y.sum()))
+        rows.append(SweepRow(setting=setting.name,
+                             rule=f'p>={rule.threshold:g} x{rule.confirm_frames}',
+                             summary=summarize(outcomes), precision=precision,
+                             recall=recall))
+    return rows
+
+
+def rows_markdown(rows: Sequence[SweepRow]) -> str:
+    """Return the sweep table as markdown."""
+    lines = ['| setting | rule | detected | missed+late | premature | latency median [ms] | '
+             'p95 [ms] | impact events | frame precision | frame recall |',
+             '|---|---|---|---|---|---|---|---|---|---|']
+    for r in rows:
+        s = r.summary
+
+        def ms(v):
+            return '-' if v is None else f'{v:.0f}'
+        lines.append(f"| {r.setting} | {r.rule} | {s['detected']}/{s['trials']} | "
+                     f"{s['missed'] + s['late']} | {s['premature']} | "
+                     f"{ms(s['latency_ms_median'])} | {ms(s['latency_ms_p95'])} | "
+                     f"{s['impact_events']} | {r.precision:.2f} | {r.recall:.2f} |")
+    return '\n'.join(lines)
+
+
+def best_row(rows: Sequence[SweepRow]) -> Optional[SweepRow]:
+    """Zero premature first, then most detected, then lowest median latency."""
+    def key(r: SweepRow):
+        s = r.summary
+        latency = s['latency_ms_median'] if s['latency_ms_median'] is not None else 1e9
+        return (s['premature'], -s['detected'], s['impact_events'], latency)
+    return min(rows, key=key) if rows else None

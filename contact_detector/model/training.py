@@ -1,0 +1,255 @@
+"""Training protocol of the contact forest (paper section 4.4 and 5), on the streaming features.
+
+Features come from recordings through :func:`contact_detector.detection.offline.run_features`,
+the same code path the node runs. The protocol follows the paper: a 56/19/25 split,
+``n_estimators`` in 1..10 chosen by validation ROC AUC, ``max_features = sqrt(n_features)``,
+stratified 10-fold cross-validation, a test classification report. The paper split *frames*
+at random, which puts neighbouring, nearly identical frames of one trial on both sides; we
+report that split and a split by *trial*, and quote the trial split.
+"""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence
+
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.metrics import (accuracy_score, classification_report, confusion_matrix,
+                             roc_auc_score)
+from sklearn.model_selection import (StratifiedGroupKFold, StratifiedKFold, train_test_split)
+
+from contact_detector.detection.offline import run_features
+from contact_detector.errors import BagError
+from contact_detector.evaluation.metrics import frame_labels
+from contact_detector.features.config import FeatureConfig
+from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
+
+SPLIT = (0.56, 0.19, 0.25)
+
+
+@dataclass(frozen=True)
+class LabelWindow:
+    """
+    Frames labelled *contact*: those ending in ``[onset + start_s, onset + end_s)``.
+
+    The paper labels the first instants of the contact (about 0.1 s); a longer window labels
+    the contact *state* after the onset.
+    """
+
+    start_s: float = 0.0
+    end_s: float = 0.1
+
+    def to_dict(self) -> dict:
+        """Plain-JSON form, stored in the model bundle."""
+        return {'start_s': self.start_s, 'end_s': self.end_s}
+
+
+@dataclass
+class TrialData:
+    """Features and labels of one recording (valid frames only)."""
+
+    name: str
+    condition: str
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    onsets: List[float]
+
+
+def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_rate: float,
+                   wrench_rate: float, label_window: LabelWindow,
+                   onsets: Optional[List[float]] = None, condition: str = '') -> TrialData:
+    """
+    Compute the labelled feature frames of one bag.
+
+    Parameters
+    ----------
+    bag : Path
+        Bag directory.
+    config : FeatureConfig
+        Feature contract.
+    spec : StreamSpec
+        Topics.
+    audio_rate, wrench_rate : float
+        Hz.
+    label_window : LabelWindow
+        Which frames are *contact*.
+    onsets : list of float or None
+        True onsets (s); None = from the bag's truth topic.
+    condition : str
+        Condition label for reports.
+
+    Returns
+    -------
+    TrialData
+
+    """
+    events = load_events(bag, spec=spec)
+    if onsets is None:
+        onsets = [start for start, _ in truth_onsets(events)]
+        if not onsets:
+            raise BagError(f'{bag}: no True message on {spec.truth_topic}; give --labels')
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate,
+                                          ft_input_rate=wrench_rate)
+    frames = run_features(events, extractor=extractor)
+    keep = frames.valid
+    t = frames.t[keep]
+    y = frame_labels(t=t, onsets=onsets, start_s=label_window.start_s,
+                     end_s=label_window.end_s)
+    return TrialData(name=Path(bag).name, condition=condition, t=t, x=frames.x[keep], y=y,
+                     onsets=list(onsets))
+
+
+def read_labels_csv(path: Path) -> Dict[str, List[float]]:
+    """
+    Read ``bag,onset_start,onset_end`` rows (a header row is allowed) into bag -> onsets.
+
+    Raises
+    ------
+    BagError
+        On a malformed row, naming its line.
+
+    """
+    out: Dict[str, List[float]] = {}
+    for number, line in enumerate(Path(path).read_text().splitlines(), start=1):
+        cells = [c.strip() for c in line.split(',')]
+        header = number == 1 and not _is_float(cells[1] if len(cells) > 1 else '')
+        if not line.strip() or header:
+            continue
+        if len(cells) < 2 or not _is_float(cells[1]):
+            raise BagError(f'{path}:{number}: expected "bag,onset_start,onset_end", '
+                           f'got {line!r}')
+        out.setdefault(Path(cells[0]).name, []).append(float(cells[1]))
+    return out
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _forest(n: int, seed: int, jobs: int) -> RandomForestClassifier:
+    return RandomForestClassifier(n_estimators=n, max_features='sqrt', random_state=seed,
+                                  n_jobs=jobs)
+
+
+@dataclass
+class SplitResult:
+    """What one split (by sample or by trial) produced."""
+
+    name: str
+    n_table: List[dict]
+    best_n: int
+    cv_mean: float
+    cv_sd: float
+    report_text: str
+    report: dict
+    confusion: List[List[int]]
+    test_auc: float
+    y_test: np.ndarray = field(repr=False, default=None)
+    p_test: np.ndarray = field(repr=False, default=None)
+    forest: RandomForestClassifier = field(repr=False, default=None)
+    test_trials: List[str] = field(default_factory=list)
+
+
+def split_indices(*, kind: str, y: np.ndarray, groups: np.ndarray,
+                  seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Split frames 56/19/25 into train, validation and test indices.
+
+    ``kind='sample'`` splits frames at random, stratified by label (the paper); ``'trial'``
+    splits whole trials, so no trial has frames on two sides.
+    """
+    idx = np.arange(y.size)
+    if kind == 'sample':
+        rest, test = train_test_split(idx, test_size=SPLIT[2], stratify=y, random_state=seed)
+        train, val = train_test_split(rest, test_size=SPLIT[1] / (SPLIT[0] + SPLIT[1]),
+                                      stratify=y[rest], random_state=seed)
+        return train, val, test
+    trials = np.unique(groups)
+    order = np.random.default_rng(seed).permutation(trials)
+    n_test = max(1, int(round(SPLIT[2] * trials.size)))
+    n_val = max(1, int(round(SPLIT[1] * trials.size)))
+    test_g, val_g = order[:n_test], order[n_test:n_test + n_val]
+    train_g = order[n_test + n_val:]
+    return (idx[np.isin(groups, train_g)], idx[np.isin(groups, val_g)],
+            idx[np.isin(groups, test_g)])
+
+
+def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
+              trial_names: Sequence[str], seed: int, jobs: int,
+              n_range: Sequence[int] = range(1, 11),
+              progress: Optional[Callable[[str], None]] = None) -> SplitResult:
+    """
+    Run the paper's protocol on one split kind; the returned forest is refit on train + val.
+
+    Parameters
+    ----------
+    kind : str
+        'sample' or 'trial'.
+    x : np.ndarray, shape (n, n_features)
+    y : np.ndarray, shape (n,)
+    groups : np.ndarray, shape (n,)
+        Trial index of each frame.
+    trial_names : sequence of str
+        Name of each trial index.
+    seed, jobs : int
+        Random seed; joblib workers for the forests.
+    n_range : sequence of int
+        Candidate ``n_estimators``.
+    progress : callable or None
+        Called with a short message after each step.
+
+    Returns
+    -------
+    SplitResult
+
+    """
+    if np.unique(y).size < 2:
+        raise BagError('the labelled frames contain only one class: check the truth topic or '
+                       'the label window')
+    train, val, test = split_indices(kind=kind, y=y, groups=groups, seed=seed)
+    table = []
+    for n in n_range:
+        forest = _forest(n, seed, jobs).fit(x[train], y[train])
+        p = forest.predict_proba(x[val])[:, 1]
+        auc = roc_auc_score(y[val], p) if np.unique(y[val]).size == 2 else float('nan')
+        table.append({'n_estimators': n, 'accuracy': accuracy_score(y[val], p >= 0.5),
+                      'auc': auc})
+        if progress:
+            progress(f'{kind} split: n_estimators={n} AUC={auc:.5f}')
+    best = max(table, key=lambda row: (np.nan_to_num(row['auc'], nan=-1.0),
+                                       -row['n_estimators']))['n_estimators']
+    if kind == 'sample':
+        folds = StratifiedKFold(n_splits=10, shuffle=True, random_state=seed).split(x, y)
+    else:
+        n_splits = min(10, np.unique(groups).size)
+        folds = StratifiedGroupKFold(n_splits=n_splits, shuffle=True,
+                                     random_state=seed).split(x, y, groups)
+    scores = []
+    for fold_train, fold_test in folds:
+        forest = _forest(best, seed, jobs).fit(x[fold_train], y[fold_train])
+        scores.append(accuracy_score(y[fold_test], forest.predict(x[fold_test])))
+    if progress:
+        progress(f'{kind} split: 10-fold CV accuracy {np.mean(scores):.5f}')
+    fit_idx = np.concatenate([train, val])
+    forest = _forest(best, seed, jobs).fit(x[fit_idx], y[fit_idx])
+    p_test = forest.predict_proba(x[test])[:, 1]
+    pred = (p_test >= 0.5).astype(int)
+    names = ['not contact', 'contact']
+    return SplitResult(
+        name=kind, n_table=table, best_n=best, cv_mean=float(np.mean(scores)),
+        cv_sd=float(np.std(scores)),
+        report_text=classification_report(y[test], pred, labels=[0, 1], target_names=names,
+                                          digits=2, zero_division=0),
+        report=classification_report(y[test], pred, labels=[0, 1], target_names=names,
+                                     output_dict=True, zero_division=0),
+        confusion=confusion_matrix(y[test], pred, labels=[0, 1]).tolist(),
+        test_auc=float(roc_auc_score(y[test], p_test)) if np.unique(y[test]).size == 2
+        else float('nan'),
+        y_test=y[test], p_test=p_test, forest=forest,
+        test_trials=sorted({trial_names[g] for g in np.unique(groups[test])}))

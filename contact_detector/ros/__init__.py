@@ -1,0 +1,1 @@
+"""ROS 2 interface: the only subpackage that imports rclpy and message modules."""

@@ -1,0 +1,643 @@
+"""The live contact detector node.
+
+It converts messages to arrays (:mod:`contact_detector.io.messages`), hands them to
+:class:`~contact_detector.detection.detector.ContactDetector` (all the logic: features, forest,
+confirmation, arming, warm-up, staleness, corrupt-input hold-off, time-jump reset) and turns the
+returned decisions into messages. The offline tools run the same detector on the same arrays.
+
+Interface (all names relative, remappable)::
+
+    subscribes  wrist_wrench         geometry_msgs/msg/WrenchStamped   sensor-data QoS
+                audio                audio.msg_type                    sensor-data QoS
+                audio_info           audio_common_msgs/msg/AudioInfo   transient local
+                                     (ros-drivers audio_common types only)
+    publishes   contact              std_msgs/msg/Bool      one per audio frame
+                contact_probability  std_msgs/msg/Float32   one per audio frame
+                release              std_msgs/msg/Bool      True once per event while armed
+                /diagnostics         diagnostic_msgs/msg/DiagnosticArray
+                gripper.topic        trajectory_msgs/msg/JointTrajectory (gripper.enabled)
+    services    ~/arm                std_srvs/srv/SetBool
+                ~/reset              std_srvs/srv/Trigger
+
+See ``docs/node.md``.
+"""
+
+from collections import deque
+from dataclasses import replace
+import importlib
+import sys
+import time
+from typing import Any, Dict, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+import rclpy
+from rclpy.clock import JumpThreshold
+from rclpy.duration import Duration
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data,
+                       ReliabilityPolicy)
+from rcl_interfaces.msg import SetParametersResult
+from std_msgs.msg import Bool, Float32
+from std_srvs.srv import SetBool, Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
+from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
+                                          audio_stamp, audio_to_samples, check_audio_info,
+                                          check_stamp, embedded_audio_format,
+                                          wrench_to_arrays)
+from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
+from contact_detector.ros.gripper import open_gripper_trajectory
+from contact_detector.ros.params import (config_from_values, current_values,
+                                         declare_parameters, NodeConfig, PARAMS_BY_NAME)
+
+#: A backwards jump of the node clock larger than this resets the detector, s.
+CLOCK_JUMP_RESET_S = 0.1
+#: Processing latencies kept for :meth:`ContactDetectorNode.latency_samples`.
+LATENCY_HISTORY = 100_000
+
+NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
+                 'callback_errors', 'detector_rebuilds', 'contact_msgs', 'release_msgs')
+#: Counters whose increase during a diagnostics period turns the status to WARN.
+WARN_COUNTERS = ('audio_dropped', 'wrench_dropped', 'time_jumps', 'clock_jumps',
+                 'callback_errors', 'audio_waiting_info', 'bad_stamps')
+
+
+def import_audio_types(msg_type: str) -> tuple:
+    """
+    Import the message classes of an audio type of :data:`AUDIO_MSG_TYPES`.
+
+    Returns
+    -------
+    spec : AudioMsgType
+    msg_class : type
+        The audio message class.
+    info_class : type or None
+        ``AudioInfo`` for types whose format comes from an ``audio_info`` topic.
+
+    Raises
+    ------
+    ConfigError
+        The package is not installed, or the installed one lacks the type (the two
+        audio_common variants share the package name ``audio_common_msgs``).
+
+    """
+    spec: AudioMsgType = AUDIO_MSG_TYPES[msg_type]
+    try:
+        module = importlib.import_module(f'{spec.package}.msg')
+    except ImportError as err:
+        raise ConfigError(
+            f'audio.msg_type={msg_type!r} needs the ROS message package {spec.package!r} '
+            f'({spec.source}), which is not installed here ({err}). Install or build it in '
+            'your workspace and source it, or publish audio as std_msgs/msg/Int16MultiArray'
+        ) from err
+    msg_class = getattr(module, spec.type_name, None)
+    if msg_class is None:
+        raise ConfigError(f'the installed {spec.package} has no {spec.type_name}: '
+                          f'{msg_type} comes from {spec.source}, another package of the same '
+                          'name is installed')
+    info_class = None
+    if spec.info_topic:
+        info_class = getattr(module, 'AudioInfo', None)
+        if info_class is None:
+            raise ConfigError(f'the installed {spec.package} has no AudioInfo')
+    return spec, msg_class, info_class
+
+
+class _Throttle:
+    """Rate-limit log lines per key; count what was suppressed."""
+
+    def __init__(self) -> None:
+        self._last: Dict[str, float] = {}
+        self._suppressed: Dict[str, int] = {}
+
+    def __call__(self, key: str, period_s: float) -> Optional[int]:
+        """Return the number suppressed since the last line if one may be logged, else None."""
+        now = time.monotonic()
+        last = self._last.get(key)
+        if last is not None and now - last < period_s:
+            self._suppressed[key] = self._suppressed.get(key, 0) + 1
+            return None
+        self._last[key] = now
+        return self._suppressed.pop(key, 0)
+
+
+class _Stream:
+    """Arrival bookkeeping of one input topic (for rates and staleness in diagnostics)."""
+
+    def __init__(self) -> None:
+        self.last_rx: Optional[float] = None       # node clock, s
+        self.last_stamp: Optional[float] = None    # stamp of the last accepted message, s
+        self.received = 0                           # messages since start-up
+        self.window_msgs = 0
+        self.window_samples = 0
+
+
+class ContactDetectorNode(Node):
+    """
+    ROS 2 node around :class:`ContactDetector`.
+
+    Parameters
+    ----------
+    node_name : str
+        Node name (default ``contact_detector``).
+    bundle : ModelBundle, optional
+        A loaded model; default: load ``model.path`` (or the shipped model).
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``, ...).
+
+    Raises
+    ------
+    ConfigError
+        A parameter is invalid, or the audio message package is missing.
+    ModelError
+        The model cannot be loaded.
+
+    """
+
+    def __init__(self, node_name: str = 'contact_detector', *,
+                 bundle: Optional[ModelBundle] = None, **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        try:
+            self._setup(bundle)
+        except BaseException:
+            self.destroy_node()
+            raise
+
+    # --- set-up ----------------------------------------------------------------------------------
+
+    def _setup(self, bundle: Optional[ModelBundle]) -> None:
+        self.config: NodeConfig = declare_parameters(self)
+        cfg = self.config
+        self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
+        if bundle is None:
+            path = cfg.model_path or str(default_model_path())
+            bundle = load_bundle(path=path)
+            self.model_path = path
+        else:
+            self.model_path = '(given)'
+        self.bundle = bundle
+        self.counts = {name: 0 for name in NODE_COUNTERS}
+        self._count_base: Dict[str, int] = {}
+        self._throttle = _Throttle()
+        self._pending: Optional[NodeConfig] = None
+        self.audio = _Stream()
+        self.wrench = _Stream()
+        self.audio_format = AudioFormat(sample_rate=cfg.audio_sample_rate,
+                                        channels=cfg.audio_channels)
+        # ros-drivers types: the format is confirmed by audio_info (None = not yet).
+        self.audio_info_ok: Optional[bool] = (None if self.audio_spec.info_topic
+                                              and cfg.audio_wait_for_info else True)
+        self.audio_refused: Optional[str] = None
+        self.detector = self._build_detector(rate=cfg.audio_sample_rate,
+                                             armed=cfg.release_armed_on_start)
+        self._time_jumps_seen = 0
+        self._latency = deque(maxlen=LATENCY_HISTORY)
+        self._window_latency: list = []
+        self._window_age: list = []
+        self._window_start = time.monotonic()
+        self._window_counts: Dict[str, int] = {}
+        self._last_frame_t: Optional[float] = None
+
+        self._contact_msg, self._prob_msg = Bool(), Float32()
+        output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                                reliability=ReliabilityPolicy.RELIABLE)
+        self.contact_pub = self.create_publisher(Bool, 'contact', output_qos)
+        self.probability_pub = self.create_publisher(Float32, 'contact_probability', output_qos)
+        self.release_pub = self.create_publisher(Bool, 'release', output_qos)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.gripper_pub = (self.create_publisher(JointTrajectory, cfg.gripper_topic,
+                                                  output_qos)
+                            if cfg.gripper_enabled else None)
+
+        input_qos = QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=cfg.qos_depth,
+            reliability=(ReliabilityPolicy.RELIABLE if cfg.qos_reliability == 'reliable'
+                         else ReliabilityPolicy.BEST_EFFORT),
+            durability=qos_profile_sensor_data.durability)
+        self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
+                                                   self._on_wrench, input_qos)
+        self.audio_sub = self.create_subscription(audio_class, 'audio', self._on_audio,
+                                                  input_qos)
+        self.info_sub = None
+        if info_class is not None:
+            info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                                  reliability=ReliabilityPolicy.RELIABLE,
+                                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            self.info_sub = self.create_subscription(info_class, 'audio_info',
+                                                     self._on_audio_info, info_qos)
+        self.arm_srv = self.create_service(SetBool, '~/arm', self._on_arm)
+        self.reset_srv = self.create_service(Trigger, '~/reset', self._on_reset)
+        self.diagnostics_timer = self.create_timer(cfg.diagnostics_period_s,
+                                                   self._publish_diagnostics)
+        self._jump_handle = self.get_clock().create_jump_callback(
+            JumpThreshold(min_forward=None, min_backward=Duration(
+                nanoseconds=-int(CLOCK_JUMP_RESET_S * 1e9))),
+            post_callback=self._on_clock_jump)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        rule = self.detector.rule
+        self.get_logger().info(
+            f'model {bundle.model_id} ({self.model_path}); rule threshold={rule.threshold:.3f} '
+            f'confirm_frames={rule.confirm_frames} refractory_s={rule.refractory_s:.2f}; '
+            f'audio {cfg.audio_msg_type} {self._format_text()}; wrench {cfg.wrench_rate:g} Hz; '
+            f'release {"armed" if self.detector.armed else "disarmed"}')
+
+    def _settings(self, *, rate: float, armed: bool) -> DetectorSettings:
+        cfg = self.config
+        return DetectorSettings(
+            audio_rate=rate, wrench_rate=cfg.wrench_rate, max_ft_age_s=cfg.max_ft_age_s,
+            max_ft_wait_s=cfg.max_ft_wait_s, max_input_delay_s=cfg.max_input_delay_s,
+            warmup_s=cfg.warmup_s, corrupt_holdoff_s=cfg.corrupt_holdoff_s, armed_on_start=armed,
+            rule=cfg.rule(self.bundle.decision_rule))
+
+    def _build_detector(self, *, rate: float, armed: bool) -> ContactDetector:
+        try:
+            return ContactDetector(bundle=self.bundle,
+                                   settings=self._settings(rate=rate, armed=armed))
+        except ConfigError as err:
+            raise ConfigError(f'cannot run model {self.bundle.model_id} with audio at {rate:g} '
+                              f'Hz and wrench.rate={self.config.wrench_rate:g} Hz: {err}'
+                              ) from err
+
+    def _format_text(self) -> str:
+        fmt, channel = self.audio_format, self.config.audio_channel
+        which = 'mixed' if channel is None else f'channel {channel}'
+        return f'{fmt.sample_rate:g} Hz x {fmt.channels} ch ({which})'
+
+    # --- helpers ---------------------------------------------------------------------------------
+
+    def _now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def _warn(self, key: str, message: str) -> None:
+        suppressed = self._throttle(key, self.config.log_throttle_s)
+        if suppressed is not None:
+            more = f' ({suppressed} more since the last report)' if suppressed else ''
+            self.get_logger().warning(message + more)
+
+    def _callback_failed(self, where: str, err: BaseException) -> None:
+        self.counts['callback_errors'] += 1
+        self._warn(f'error-{where}', f'{where} callback failed and dropped its message: '
+                   f'{type(err).__name__}: {err}')
+
+    def _set_audio_rate(self, rate: float) -> None:
+        """Rebuild the detector for another audio rate (arming kept, counters carried)."""
+        if rate == self.detector.settings.audio_rate:
+            return
+        armed = self.detector.armed
+        for name, value in self.detector.counts.items():
+            self._count_base[name] = self._count_base.get(name, 0) + value
+        try:
+            self.detector = self._build_detector(rate=rate, armed=armed)
+        except ConfigError as err:
+            self.audio_refused = str(err)
+            self.get_logger().error(f'audio refused: {err}')
+            return
+        self.counts['detector_rebuilds'] += 1
+        self._time_jumps_seen = 0
+        self.get_logger().info(f'audio rate is now {rate:g} Hz: detector rebuilt, state reset')
+
+    def detector_counts(self) -> Dict[str, int]:
+        """Detector counters since start-up (summed over rebuilds) plus the node's own."""
+        counts = {name: self._count_base.get(name, 0) + value
+                  for name, value in self.detector.counts.items()}
+        counts.update(self.counts)
+        return counts
+
+    def latency_samples(self) -> np.ndarray:
+        """Return the processing times (s) of recent callbacks that published, oldest first."""
+        return np.array(self._latency)
+
+    # --- input callbacks -------------------------------------------------------------------------
+
+    def _on_audio(self, msg: Any) -> None:
+        entry = time.perf_counter()
+        try:
+            now = self._now()
+            self._receive_audio(msg, now, entry)
+        except Exception as err:  # a callback must never raise
+            self._callback_failed('audio', err)
+
+    def _receive_audio(self, msg: Any, now: float, entry: float) -> None:
+        cfg = self.config
+        stream = self.audio
+        stream.last_rx = now
+        stream.received += 1
+        stream.window_msgs += 1
+        if self.audio_refused is not None:
+            self.counts['audio_refused'] += 1
+            self._warn('audio-refused', f'audio dropped: {self.audio_refused}')
+            return
+        if not self.audio_info_ok:
+            self.counts['audio_waiting_info'] += 1
+            self._warn('audio-info', 'audio dropped: waiting for audio_info (transient local) '
+                       'to confirm raw S16LE audio; set audio.wait_for_info:=false to trust '
+                       'the audio.* parameters')
+            return
+        try:
+            if self.audio_spec.embedded_info:
+                fmt = embedded_audio_format(msg, cfg.audio_msg_type)
+                if fmt != self.audio_format:
+                    self.audio_format = fmt
+                    self._set_audio_rate(fmt.sample_rate)
+                    if self.audio_refused is not None:
+                        return
+            max_samples = int(cfg.audio_max_chunk_s * self.audio_format.sample_rate)
+            samples = audio_to_samples(msg, msg_type=cfg.audio_msg_type,
+                                       channels=self.audio_format.channels,
+                                       channel=cfg.audio_channel, max_samples=max_samples)
+            stamp = now
+            if cfg.audio_stamp_source == 'header':
+                stamp = audio_stamp(msg, cfg.audio_msg_type)
+                try:
+                    check_stamp(stamp=stamp, now=now, max_future_s=cfg.max_future_s,
+                                previous=stream.last_stamp, what='audio stamp',
+                                backjump_s=self.detector.extractor.audio.backjump_tolerance_s)
+                except InputError:
+                    self.counts['bad_stamps'] += 1
+                    raise
+        except InputError as err:
+            self._handle(self.detector.drop(kind='audio', reason=str(err), stamp=now), now,
+                         entry)
+            return
+        stream.last_stamp = stamp
+        stream.window_samples += samples.shape[0]
+        self._handle(self.detector.on_audio(samples, stamp=stamp, now=now), now, entry)
+
+    def _on_wrench(self, msg: Any) -> None:
+        entry = time.perf_counter()
+        try:
+            now = self._now()
+            self._receive_wrench(msg, now, entry)
+        except Exception as err:  # a callback must never raise
+            self._callback_failed('wrench', err)
+
+    def _receive_wrench(self, msg: Any, now: float, entry: float) -> None:
+        stream = self.wrench
+        stream.last_rx = now
+        stream.received += 1
+        stream.window_msgs += 1
+        try:
+            t, force, torque = wrench_to_arrays(msg)
+            if self.config.wrench_stamp_source == 'receive':
+                t = np.array([now])
+            else:
+                try:
+                    check_stamp(stamp=float(t[0]), now=now,
+                                max_future_s=self.config.max_future_s, what='wrench stamp')
+                except InputError:
+                    self.counts['bad_stamps'] += 1
+                    raise
+        except InputError as err:
+            self._handle(self.detector.drop(kind='wrench', reason=str(err), stamp=None), now,
+                         entry)
+            return
+        stream.last_stamp = float(t[-1])
+        stream.window_samples += t.shape[0]
+        self._handle(self.detector.on_wrench(t=t, force=force, torque=torque, now=now), now,
+                     entry)
+
+    def _on_audio_info(self, msg: Any) -> None:
+        try:
+            try:
+                fmt = check_audio_info(msg)
+            except ConfigError as err:
+                if self.audio_refused != str(err):
+                    self.get_logger().error(f'audio refused: {err}')
+                self.audio_refused = str(err)
+                self.audio_info_ok = False
+                return
+            if self.audio_refused is not None or not self.audio_info_ok \
+                    or fmt != self.audio_format:
+                self.get_logger().info(f'audio_info: {fmt.sample_rate:g} Hz, {fmt.channels} '
+                                       'channel(s), raw S16LE')
+            self.audio_refused = None
+            self.audio_info_ok = True
+            self.audio_format = fmt
+            self._set_audio_rate(fmt.sample_rate)
+        except Exception as err:  # a callback must never raise
+            self._callback_failed('audio_info', err)
+
+    # --- output ----------------------------------------------------------------------------------
+
+    def _handle(self, decisions: Decisions, now: float, entry: float) -> None:
+        """Publish a block of decisions and note what the detector reported."""
+        if decisions.error is not None:
+            kind = 'audio' if decisions.error.startswith('audio') else 'wrench'
+            self._warn(f'drop-{kind}', decisions.error)
+        jumps = self.detector.counts.get('time_jumps', 0)
+        if jumps != self._time_jumps_seen:
+            self._time_jumps_seen = jumps
+            self.get_logger().warning(f'{self.detector.last_error}; warming up again')
+        n = len(decisions)
+        if n == 0:
+            return
+        contact_msg, prob_msg = self._contact_msg, self._prob_msg
+        for i in range(n):
+            contact_msg.data = bool(decisions.contact[i])
+            prob_msg.data = float(decisions.p[i])
+            self.contact_pub.publish(contact_msg)
+            self.probability_pub.publish(prob_msg)
+        self.counts['contact_msgs'] += n
+        for t in decisions.releases:
+            self._release(t)
+        done = time.perf_counter()
+        latency = done - entry
+        self._latency.append(latency)
+        self._window_latency.append(latency)
+        self._window_age.append(now + latency - float(decisions.t[-1]))
+        self._last_frame_t = float(decisions.t[-1])
+
+    def _release(self, t: float) -> None:
+        self.release_pub.publish(Bool(data=True))
+        self.counts['release_msgs'] += 1
+        if self.gripper_pub is not None:
+            cfg = self.config
+            self.gripper_pub.publish(open_gripper_trajectory(
+                joint=cfg.gripper_joint, position=cfg.gripper_position,
+                duration_s=cfg.gripper_duration_s))
+        self.get_logger().info(f'contact at t={t:.3f} s: RELEASE (disarmed until ~/arm)')
+
+    # --- services, clock -------------------------------------------------------------------------
+
+    def _on_arm(self, request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
+        try:
+            self.detector.arm(bool(request.data))
+            response.success = True
+            response.message = 'release armed' if request.data else 'release disarmed'
+            self.get_logger().info(response.message)
+        except Exception as err:  # a callback must never raise
+            response.success, response.message = False, f'{type(err).__name__}: {err}'
+        return response
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        try:
+            self.detector.reset()
+            self.audio.last_stamp = None
+            self.wrench.last_stamp = None
+            response.success = True
+            response.message = ('stream state reset, warming up again; release '
+                                f'{"armed" if self.detector.armed else "disarmed"}')
+            self.get_logger().info(response.message)
+        except Exception as err:  # a callback must never raise
+            response.success, response.message = False, f'{type(err).__name__}: {err}'
+        return response
+
+    def _on_clock_jump(self, jump: Any) -> None:
+        try:
+            self.counts['clock_jumps'] += 1
+            self.detector.reset()
+            self.audio.last_stamp = None
+            self.wrench.last_stamp = None
+            self.get_logger().warning(
+                f'node clock jumped by {jump.delta.nanoseconds * 1e-9:+.3f} s (bag loop or '
+                'seek?): detector state reset, warming up again')
+        except Exception as err:  # a callback must never raise
+            self._callback_failed('clock jump', err)
+
+    # --- parameters ------------------------------------------------------------------------------
+
+    def _validate_parameters(self, params: list) -> SetParametersResult:
+        mine = {p.name: p.value for p in params if p.name in PARAMS_BY_NAME}
+        if not mine:
+            return SetParametersResult(successful=True)
+        values = current_values(self)
+        values.update(mine)
+        try:
+            candidate = config_from_values(values)
+            candidate.rule(self.bundle.decision_rule)
+        except ConfigError as err:
+            self.get_logger().warning(f'parameter update refused: {err}')
+            return SetParametersResult(successful=False, reason=str(err))
+        self._pending = candidate
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, params: list) -> None:
+        new, self._pending = self._pending, None
+        if new is None or not any(p.name in PARAMS_BY_NAME for p in params):
+            return
+        old, self.config = self.config, new
+        det = self.detector
+        det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
+                               warmup_s=new.warmup_s, corrupt_holdoff_s=new.corrupt_holdoff_s,
+                               rule=new.rule(self.bundle.decision_rule))
+        det.set_rule(det.settings.rule)
+        if new.diagnostics_period_s != old.diagnostics_period_s:
+            self.destroy_timer(self.diagnostics_timer)
+            self.diagnostics_timer = self.create_timer(new.diagnostics_period_s,
+                                                       self._publish_diagnostics)
+        changed = ', '.join(f'{p.name}={p.value!r}' for p in params if p.name in PARAMS_BY_NAME)
+        self.get_logger().info(f'parameters updated: {changed}')
+
+    # --- diagnostics -----------------------------------------------------------------------------
+
+    def _publish_diagnostics(self) -> None:
+        try:
+            self.diagnostics_pub.publish(self.diagnostics())
+        except Exception as err:  # a callback must never raise
+            self._callback_failed('diagnostics', err)
+
+    def diagnostics(self) -> DiagnosticArray:
+        """Build the diagnostics message and start a new measurement window."""
+        now = self._now()
+        mono = time.monotonic()
+        span = max(mono - self._window_start, 1e-9)
+        cfg, det = self.config, self.detector
+        counts = self.detector_counts()
+        values: Dict[str, str] = {}
+
+        def age(stream: _Stream) -> Optional[float]:
+            return None if stream.last_rx is None else now - stream.last_rx
+
+        def fmt_s(value: Optional[float]) -> str:
+            return 'never' if value is None else f'{value:.3f}'
+
+        def pct(samples: list, q: float) -> str:
+            return f'{1e3 * float(np.percentile(samples, q)):.3f}' if samples else 'n/a'
+
+        audio_age, wrench_age = age(self.audio), age(self.wrench)
+        rule = det.rule
+        values.update({
+            'model_id': self.bundle.model_id,
+            'model_path': self.model_path,
+            'decision_rule': f'threshold={rule.threshold:.3f} confirm_frames='
+                             f'{rule.confirm_frames} refractory_s={rule.refractory_s:.3f}',
+            'armed': str(det.armed),
+            'audio_msg_type': cfg.audio_msg_type,
+            'audio_format': self._format_text(),
+            'audio_info': ('refused: ' + self.audio_refused if self.audio_refused
+                           else 'n/a' if not self.audio_spec.info_topic
+                           else 'ok' if self.audio_info_ok else 'waiting'),
+            'audio_msg_rate_hz': f'{self.audio.window_msgs / span:.1f}',
+            'audio_sample_rate_hz': f'{self.audio.window_samples / span:.0f}',
+            'wrench_msg_rate_hz': f'{self.wrench.window_msgs / span:.1f}',
+            'wrench_sample_rate_hz': f'{self.wrench.window_samples / span:.1f}',
+            'audio_age_s': fmt_s(audio_age),
+            'wrench_age_s': fmt_s(wrench_age),
+            'wrench_stamp_lag_s': fmt_s(None if self.wrench.last_stamp is None
+                                        else now - self.wrench.last_stamp),
+            'latency_p50_ms': pct(self._window_latency, 50),
+            'latency_p99_ms': pct(self._window_latency, 99),
+            'latency_max_ms': pct(self._window_latency, 100),
+            'frame_age_p50_ms': pct(self._window_age, 50),
+            'frame_age_p99_ms': pct(self._window_age, 99),
+            'last_error': det.last_error or '',
+        })
+        values.update({name: str(value) for name, value in sorted(counts.items())})
+        values['audio_received'] = str(self.audio.received)
+        values['wrench_received'] = str(self.wrench.received)
+        stale = [name for name, value in (('audio', audio_age), ('wrench', wrench_age))
+                 if value is None or value > cfg.max_input_delay_s]
+        troubles = {name: counts.get(name, 0) - self._window_counts.get(name, 0)
+                    for name in WARN_COUNTERS}
+        troubles = {name: value for name, value in troubles.items() if value > 0}
+        self._window_counts = counts
+        if self.audio_refused:
+            level, message = DiagnosticStatus.ERROR, f'audio refused: {self.audio_refused}'
+        elif stale:
+            level, message = DiagnosticStatus.WARN, f'stale or missing input: {", ".join(stale)}'
+        elif troubles:
+            level, message = DiagnosticStatus.WARN, 'bad input: ' + ', '.join(
+                f'{name} +{value}' for name, value in troubles.items())
+        else:
+            level, message = DiagnosticStatus.OK, (
+                f'running, release {"armed" if det.armed else "disarmed"}')
+        self.audio.window_msgs = self.audio.window_samples = 0
+        self.wrench.window_msgs = self.wrench.window_samples = 0
+        self._window_latency, self._window_age = [], []
+        self._window_start = mono
+        status = DiagnosticStatus(level=level, name=f'{self.get_name()}: contact detector',
+                                  message=message, hardware_id=self.get_fully_qualified_name(),
+                                  values=[KeyValue(key=k, value=v) for k, v in values.items()])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        return array
+
+
+def main(args: Optional[list] = None) -> int:
+    """Run the node (``ros2 run contact_detector contact_detector_node``); return the exit code."""
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = ContactDetectorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ConfigError, ModelError) as err:
+        rclpy.logging.get_logger('contact_detector').fatal(f'cannot start: {err}')
+        code = 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,289 @@
+"""Parameters of the contact detector node: declaration, validation, and the frozen config.
+
+Every parameter is declared with a :class:`rcl_interfaces.msg.ParameterDescriptor`
+(description, numeric range, read-only where a change at run time makes no sense), so
+``ros2 param describe`` shows it and rclpy refuses out-of-range or read-only updates itself.
+Choices and cross-parameter rules are checked by :func:`config_from_values`, at start-up and
+for every run-time update; errors name the parameter. ``params/contact_detector.yaml``
+documents the same table.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Any, Dict, Mapping, Optional, Sequence
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+
+from contact_detector.errors import ConfigError
+from contact_detector.io.messages import (AUDIO_MSG_TYPES, MAX_SAMPLE_RATE, MIN_SAMPLE_RATE,
+                                          normalise_msg_type)
+from contact_detector.model.bundle import DecisionRule
+
+STAMP_SOURCES = ('receive', 'header')
+RELIABILITIES = ('best_effort', 'reliable')
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """
+    One node parameter.
+
+    Attributes
+    ----------
+    name : str
+        Dotted parameter name (``audio.sample_rate``).
+    default : bool, int, float or str
+        Default value; its type is the parameter's type.
+    description : str
+        Shown by ``ros2 param describe``.
+    low, high : float or None
+        Inclusive range for numbers.
+    read_only : bool
+        Refuse changes after start-up.
+    choices : tuple of str
+        Allowed values of a string parameter (empty = any).
+
+    """
+
+    name: str
+    default: Any
+    description: str
+    low: Optional[float] = None
+    high: Optional[float] = None
+    read_only: bool = True
+    choices: tuple = ()
+
+    def descriptor(self) -> ParameterDescriptor:
+        """Return the rclpy descriptor: description, range, read-only flag."""
+        desc = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        if self.choices:
+            desc.additional_constraints = 'one of: ' + ', '.join(self.choices)
+        if self.low is not None and isinstance(self.default, float):
+            desc.floating_point_range = [FloatingPointRange(
+                from_value=float(self.low), to_value=float(self.high), step=0.0)]
+        elif self.low is not None and isinstance(self.default, int) \
+                and not isinstance(self.default, bool):
+            desc.integer_range = [IntegerRange(from_value=int(self.low), to_value=int(self.high),
+                                               step=1)]
+        return desc
+
+
+#: Every parameter of the node, in the order of params/contact_detector.yaml.
+PARAMS: Sequence[ParamSpec] = (
+    ParamSpec('model.path', '', 'Model file (.joblib or .skops, with its .card.json beside it); '
+              'empty = the shipped models/contact_forest.joblib.'),
+    ParamSpec('audio.msg_type', 'std_msgs/msg/Int16MultiArray',
+              'Message type of the audio topic.', choices=tuple(AUDIO_MSG_TYPES)),
+    ParamSpec('audio.sample_rate', 16000.0,
+              'Audio sample rate in Hz (for audio_common types taken from the stream info).',
+              MIN_SAMPLE_RATE, MAX_SAMPLE_RATE),
+    ParamSpec('audio.channels', 1, 'Interleaved channels per audio message (for audio_common '
+              'types taken from the stream info).', 1, 64),
+    ParamSpec('audio.channel', -1, 'Channel to use, 0-based; -1 = average all channels.',
+              -1, 63),
+    ParamSpec('audio.stamp_source', 'receive', "Time of an audio chunk's last sample: "
+              "'receive' = the node clock when the message arrives, 'header' = the header "
+              'stamp (stamped types only).', choices=STAMP_SOURCES),
+    ParamSpec('audio.max_chunk_s', 1.0, 'Largest accepted audio chunk, seconds; longer chunks '
+              'are dropped as corrupt.', 0.001, 60.0),
+    ParamSpec('audio.wait_for_info', True, 'ros-drivers audio_common types: drop audio until '
+              'audio_info has confirmed raw S16LE; false = trust the audio.* parameters.'),
+    ParamSpec('wrench.rate', 100.0, 'Wrench rate in Hz, an integer multiple of the F/T '
+              'feature rate of the model.', 1.0, 100000.0),
+    ParamSpec('wrench.stamp_source', 'header', "Time of a wrench sample: 'header' = its stamp, "
+              "'receive' = the node clock on arrival.", choices=STAMP_SOURCES),
+    ParamSpec('qos.reliability', 'best_effort', 'Reliability of the input subscriptions '
+              '(sensor-data QoS otherwise). A reliable subscription does not match a '
+              'best-effort publisher.', choices=RELIABILITIES),
+    ParamSpec('qos.depth', 10, 'History depth of the input subscriptions.', 1, 10000),
+    ParamSpec('max_input_delay_s', 0.5, 'A frame older than this (receive time minus frame '
+              'time) when processed is stale: decided false, never releases.', 0.001, 60.0,
+              read_only=False),
+    ParamSpec('max_ft_age_s', 0.0, 'Largest age of the F/T features given to an audio frame, '
+              's; 0 = the default of the feature core (F/T hop + 50 ms).', 0.0, 60.0),
+    ParamSpec('max_ft_wait_s', 0.25, 'Longest an audio frame waits for F/T before it is '
+              'decided without (invalid), s.', 0.0, 60.0),
+    ParamSpec('max_future_s', 1.0, 'A stamp further than this ahead of the node clock is '
+              'refused as corrupt (unsynchronised clocks show up here), s.', 0.0, 1.0e6,
+              read_only=False),
+    ParamSpec('warmup_s', 0.5, 'No release during this long after the first audio frame '
+              'following a start or reset, s.', 0.0, 3600.0, read_only=False),
+    ParamSpec('corrupt_holdoff_s', 0.2, 'No release during this long after a dropped '
+              '(corrupt) message, s.', 0.0, 3600.0, read_only=False),
+    ParamSpec('release.armed_on_start', True, 'Whether the release may fire before the first '
+              '~/arm call.'),
+    ParamSpec('release.threshold', -1.0, 'Contact when P(contact) >= this; negative = the '
+              'decision rule of the model.', -1.0, 1.0, read_only=False),
+    ParamSpec('release.confirm_frames', 0, 'Consecutive contact frames that make an event; 0 = '
+              'the decision rule of the model.', 0, 1000, read_only=False),
+    ParamSpec('release.refractory_s', -1.0, 'Minimum time between contact events, s; negative '
+              '= the decision rule of the model.', -1.0, 3600.0, read_only=False),
+    ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
+              'the gripper.'),
+    ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',
+              'JointTrajectory topic of the gripper controller (HSR on the ROS 1 bridge: '
+              '/hsrb/gripper_controller/command).'),
+    ParamSpec('gripper.joint', 'hand_motor_joint', 'Gripper joint to command.',
+              read_only=False),
+    ParamSpec('gripper.position', 1.2, 'Open position of the gripper joint, rad (HSR: 1.2).',
+              -100.0, 100.0, read_only=False),
+    ParamSpec('gripper.duration_s', 0.5, 'time_from_start of the trajectory point, s.',
+              0.0, 60.0, read_only=False),
+    ParamSpec('diagnostics.period_s', 1.0, 'Period of /diagnostics, s.', 0.05, 3600.0,
+              read_only=False),
+    ParamSpec('log_throttle_s', 2.0, 'Minimum time between two warnings about bad input of '
+              'one kind, s.', 0.0, 3600.0, read_only=False),
+)
+
+PARAMS_BY_NAME: Dict[str, ParamSpec] = {spec.name: spec for spec in PARAMS}
+
+
+@dataclass(frozen=True)
+class NodeConfig:
+    """
+    The node's parameters, validated (see :data:`PARAMS` for meanings and units).
+
+    ``audio_channel`` is None for "mix all channels"; ``max_ft_age_s`` None for the core's
+    default; ``release_*`` are None where the model bundle's rule applies.
+    """
+
+    model_path: str
+    audio_msg_type: str
+    audio_sample_rate: float
+    audio_channels: int
+    audio_channel: Optional[int]
+    audio_stamp_source: str
+    audio_max_chunk_s: float
+    audio_wait_for_info: bool
+    wrench_rate: float
+    wrench_stamp_source: str
+    qos_reliability: str
+    qos_depth: int
+    max_input_delay_s: float
+    max_ft_age_s: Optional[float]
+    max_ft_wait_s: float
+    max_future_s: float
+    warmup_s: float
+    corrupt_holdoff_s: float
+    release_armed_on_start: bool
+    release_threshold: Optional[float]
+    release_confirm_frames: Optional[int]
+    release_refractory_s: Optional[float]
+    gripper_enabled: bool
+    gripper_topic: str
+    gripper_joint: str
+    gripper_position: float
+    gripper_duration_s: float
+    diagnostics_period_s: float
+    log_throttle_s: float
+
+    def rule(self, base: DecisionRule) -> DecisionRule:
+        """Return ``base`` (the model's rule) with the parameters that are set overriding it."""
+        return DecisionRule(
+            threshold=base.threshold if self.release_threshold is None
+            else self.release_threshold,
+            confirm_frames=base.confirm_frames if self.release_confirm_frames is None
+            else self.release_confirm_frames,
+            refractory_s=base.refractory_s if self.release_refractory_s is None
+            else self.release_refractory_s)
+
+
+def _check(name: str, value: Any) -> Any:
+    """Check type, range and choices of one value; raise ConfigError naming the parameter."""
+    spec = PARAMS_BY_NAME.get(name)
+    if spec is None:
+        raise ConfigError(f'unknown parameter {name!r}')
+    want = type(spec.default)
+    if want is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if type(value) is not want:
+        raise ConfigError(f'parameter {name} must be a {want.__name__}, got {value!r}')
+    if want is float and not math.isfinite(value):
+        raise ConfigError(f'parameter {name} must be finite, got {value!r}')
+    if spec.low is not None and not spec.low <= value <= spec.high:
+        raise ConfigError(f'parameter {name}={value!r} is outside [{spec.low}, {spec.high}]')
+    if spec.choices and value not in spec.choices:
+        raise ConfigError(f'parameter {name}={value!r} must be one of {list(spec.choices)}')
+    return value
+
+
+def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
+    """
+    Validate parameter values (missing ones take their defaults) and freeze them.
+
+    Raises
+    ------
+    ConfigError
+        Wrong type, out of range, not one of the choices, or inconsistent with another
+        parameter; the message names the parameter.
+
+    """
+    unknown = sorted(set(values) - set(PARAMS_BY_NAME))
+    if unknown:
+        raise ConfigError(f'unknown parameters {unknown}')
+    v = {spec.name: _check(spec.name, values.get(spec.name, spec.default)) for spec in PARAMS}
+    try:
+        msg_type = normalise_msg_type(v['audio.msg_type'])
+    except ConfigError as err:
+        raise ConfigError(f'parameter audio.msg_type: {err}') from err
+    channel = v['audio.channel']
+    if channel >= v['audio.channels'] and not AUDIO_MSG_TYPES[msg_type].info_topic \
+            and not AUDIO_MSG_TYPES[msg_type].embedded_info:
+        raise ConfigError(f'parameter audio.channel={channel} does not exist with '
+                          f'audio.channels={v["audio.channels"]} (use -1 to mix)')
+    if v['audio.stamp_source'] == 'header' and not AUDIO_MSG_TYPES[msg_type].stamped:
+        raise ConfigError(f"parameter audio.stamp_source='header' needs a stamped audio type; "
+                          f'{msg_type} has no header (use receive)')
+    if v['gripper.enabled'] and not v['gripper.topic'].strip():
+        raise ConfigError('parameter gripper.topic must not be empty when gripper.enabled')
+    if not v['gripper.joint'].strip():
+        raise ConfigError('parameter gripper.joint must not be empty')
+    threshold, confirm, refractory = (v['release.threshold'], v['release.confirm_frames'],
+                                      v['release.refractory_s'])
+    return NodeConfig(
+        model_path=v['model.path'], audio_msg_type=msg_type,
+        audio_sample_rate=v['audio.sample_rate'], audio_channels=v['audio.channels'],
+        audio_channel=None if channel < 0 else channel,
+        audio_stamp_source=v['audio.stamp_source'], audio_max_chunk_s=v['audio.max_chunk_s'],
+        audio_wait_for_info=v['audio.wait_for_info'], wrench_rate=v['wrench.rate'],
+        wrench_stamp_source=v['wrench.stamp_source'], qos_reliability=v['qos.reliability'],
+        qos_depth=v['qos.depth'], max_input_delay_s=v['max_input_delay_s'],
+        max_ft_age_s=v['max_ft_age_s'] or None, max_ft_wait_s=v['max_ft_wait_s'],
+        max_future_s=v['max_future_s'], warmup_s=v['warmup_s'],
+        corrupt_holdoff_s=v['corrupt_holdoff_s'],
+        release_armed_on_start=v['release.armed_on_start'],
+        release_threshold=None if threshold < 0 else threshold,
+        release_confirm_frames=None if confirm <= 0 else confirm,
+        release_refractory_s=None if refractory < 0 else refractory,
+        gripper_enabled=v['gripper.enabled'], gripper_topic=v['gripper.topic'].strip(),
+        gripper_joint=v['gripper.joint'].strip(), gripper_position=v['gripper.position'],
+        gripper_duration_s=v['gripper.duration_s'],
+        diagnostics_period_s=v['diagnostics.period_s'], log_throttle_s=v['log_throttle_s'])
+
+
+def declare_parameters(node: Node) -> NodeConfig:
+    """
+    Declare every parameter of :data:`PARAMS` on ``node`` and return the validated config.
+
+    Raises
+    ------
+    ConfigError
+        An override (params file, ``-p``) has the wrong type, is out of range or otherwise
+        invalid; the message names the parameter.
+
+    """
+    for spec in PARAMS:
+        try:
+            node.declare_parameter(spec.name, spec.default, spec.descriptor())
+        except ParameterException as err:
+            hint = (' (write floating-point values with a decimal point, e.g. 16000.0)'
+                    if isinstance(spec.default, float) else '')
+            raise ConfigError(f'parameter {spec.name}: {err}{hint}') from err
+    return config_from_values(current_values(node))
+
+
+def current_values(node: Node) -> Dict[str, Any]:
+    """Return the node's current value of every parameter of :data:`PARAMS`."""
+    return {spec.name: node.get_parameter(spec.name).value for spec in PARAMS}

@@ -1,0 +1,177 @@
+"""Publish a rosbag2 into the live ROS graph with its original timing (no ``ros2 bag``).
+
+Messages go out as their recorded CDR bytes, so any type rclpy can import plays back
+unchanged. Two options make a recording look live:
+
+* ``clock``: publish ``/clock`` (rosgraph_msgs/Clock) with the bag time before every message
+  and at least every 10 ms, for nodes running with ``use_sim_time`` — as
+  ``ros2 bag play --clock`` does;
+* ``restamp``: shift every ``header.stamp`` by the offset between bag time and this machine's
+  time, as if the sensors were publishing now (for nodes on wall time, like a real robot;
+  real-time rate only).
+"""
+
+from dataclasses import dataclass
+import importlib
+from pathlib import Path
+import threading
+import time
+from typing import Callable, Dict, List, Optional, Sequence
+
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message, serialize_message
+from rosbags.highlevel import AnyReader
+
+from contact_detector.errors import BagError
+from contact_detector.io.bags import jazzy_typestore
+
+CLOCK_PERIOD_S = 0.01
+
+
+def import_message(msgtype: str):
+    """Return the rclpy class of ``pkg/msg/Name``; ImportError if the package is missing."""
+    package, _, name = msgtype.split('/')
+    return getattr(importlib.import_module(f'{package}.msg'), name)
+
+
+@dataclass
+class Recorded:
+    """One message: topic, type name, log time (ns), CDR bytes."""
+
+    topic: str
+    msgtype: str
+    log_ns: int
+    raw: bytes
+
+
+def read_recording(bag: Path, *, topics: Optional[Sequence[str]] = None) -> List[Recorded]:
+    """Read every message of a bag (raw CDR) in log-time order."""
+    try:
+        with AnyReader([Path(bag)], default_typestore=jazzy_typestore()) as reader:
+            connections = [c for c in reader.connections
+                           if topics is None or c.topic in topics]
+            return [Recorded(topic=c.topic, msgtype=c.msgtype, log_ns=t, raw=bytes(raw))
+                    for c, t, raw in reader.messages(connections=connections)]
+    except Exception as err:  # rosbags raises several unrelated types for unreadable bags
+        raise BagError(f'cannot read bag {bag}: {err}') from err
+
+
+class BagPlayer:
+    """
+    Publish recordings on a node with their original timing, scaled by ``rate``.
+
+    Parameters
+    ----------
+    node : Node
+        Publishes the topics (and ``/clock``).
+    rate : float
+        Playback speed (2 = twice as fast).
+    clock : bool
+        Publish ``/clock`` with the bag time.
+    restamp : bool
+        Shift header stamps to this machine's time.
+    log : callable
+        Where to report skipped topics.
+
+    """
+
+    def __init__(self, *, node: Node, rate: float = 1.0, clock: bool = False,
+                 restamp: bool = False, log: Callable[[str], None] = print) -> None:
+        if not rate > 0:
+            raise BagError(f'--rate must be > 0, got {rate}')
+        if restamp and rate != 1.0:
+            # Audio without headers is timed by arrival: it cannot play faster than real time.
+            raise BagError('--restamp plays in real time only (--rate 1); use --clock with '
+                           'use_sim_time to play faster')
+        self.node = node
+        self.rate = rate
+        self.clock = clock
+        self.restamp = restamp
+        self.log = log
+        self._publishers: Dict[str, object] = {}
+        self._types: Dict[str, object] = {}
+        self._skipped: set = set()
+        qos = QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE)
+        self._qos = qos
+        self._clock_pub = None
+        if clock:
+            from rosgraph_msgs.msg import Clock
+            self._clock_msg = Clock
+            self._clock_pub = node.create_publisher(Clock, '/clock', 10)
+        self.published = 0
+
+    def _publisher(self, record: Recorded):
+        if record.topic in self._publishers:
+            return self._publishers[record.topic]
+        try:
+            cls = import_message(record.msgtype)
+        except (ImportError, AttributeError, ValueError):
+            if record.topic not in self._skipped:
+                self._skipped.add(record.topic)
+                self.log(f'skipping {record.topic}: message type {record.msgtype} is not '
+                         'installed')
+            return None
+        self._types[record.topic] = cls
+        self._publishers[record.topic] = self.node.create_publisher(cls, record.topic,
+                                                                    self._qos)
+        return self._publishers[record.topic]
+
+    def _publish_clock(self, bag_ns: int) -> None:
+        msg = self._clock_msg()
+        msg.clock.sec, msg.clock.nanosec = divmod(int(bag_ns), 1_000_000_000)
+        self._clock_pub.publish(msg)
+
+    def play(self, records: Sequence[Recorded], *,
+             stop: Optional[threading.Event] = None,
+             on_start: Optional[Callable[[float, float], None]] = None) -> int:
+        """
+        Publish ``records`` once; return how many were published.
+
+        ``on_start(bag_start_s, wall_start_s)`` is called when the first message goes out, so
+        callers can map bag times to this machine's time.
+        """
+        if not records:
+            return 0
+        start_ns = records[0].log_ns
+        wall0 = time.time()
+        mono0 = time.monotonic()
+        offset_ns = int(wall0 * 1e9) - start_ns
+        if on_start:
+            on_start(start_ns * 1e-9, wall0)
+        next_clock = 0.0
+        for record in records:
+            due = (record.log_ns - start_ns) * 1e-9 / self.rate
+            while True:
+                if stop is not None and stop.is_set():
+                    return self.published
+                ahead = due - (time.monotonic() - mono0)
+                if self.clock and time.monotonic() - mono0 >= next_clock:
+                    elapsed = (time.monotonic() - mono0) * self.rate
+                    self._publish_clock(start_ns + int(min(elapsed * 1e9,
+                                                           record.log_ns - start_ns)))
+                    next_clock = time.monotonic() - mono0 + CLOCK_PERIOD_S
+                if ahead <= 0:
+                    break
+                time.sleep(min(ahead, CLOCK_PERIOD_S / 2))
+            publisher = self._publisher(record)
+            if publisher is None:
+                continue
+            if self.clock:
+                self._publish_clock(record.log_ns)
+            raw = record.raw
+            if self.restamp:
+                raw = self._restamped(record, offset_ns)
+            publisher.publish(raw)
+            self.published += 1
+        return self.published
+
+    def _restamped(self, record: Recorded, offset_ns: int) -> bytes:
+        cls = self._types[record.topic]
+        if 'header' not in cls.get_fields_and_field_types():
+            return record.raw
+        msg = deserialize_message(record.raw, cls)
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp + offset_ns,
+                                                                1_000_000_000)
+        return serialize_message(msg)

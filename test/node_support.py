@@ -1,0 +1,121 @@
+"""Shared helpers of the node tests: a small test model and simulated-trial message streams.
+
+Used by test_node.py, test_e2e_node.py, e2e_publisher.py and benchmarks/bench_node.py. The
+model is the shipped ``models/contact_forest.joblib`` when it exists, otherwise a small forest
+(8 trees) trained here on features of simulated trials, saved with ``save_bundle``.
+"""
+
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import List, Optional
+
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
+
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
+                                           save_bundle)
+from contact_detector.sim.trial import simulate_trial, Trial
+
+REPO = Path(__file__).resolve().parents[1]
+SHIPPED_MODEL = REPO / 'models' / 'contact_forest.joblib'
+#: Simulator seed of the test model's training trials; test trials use other seeds.
+TRAIN_SEED = 7
+TRAIN_TRIALS = 12
+LABEL_WINDOW_S = 0.1
+TEST_RULE = DecisionRule(threshold=0.5, confirm_frames=2, refractory_s=1.0)
+
+_cache: dict = {}
+
+
+@dataclass(frozen=True)
+class Event:
+    """One message of a trial, at its log (receive) time ``t`` (s)."""
+
+    t: float
+    kind: str             # 'audio' or 'wrench'
+    lo: int               # audio: first sample; wrench: sample index
+    hi: int               # audio: end sample (exclusive); wrench: index + 1
+
+
+def trial_events(trial: Trial, *, t_from: float = -np.inf,
+                 t_to: float = np.inf) -> List[Event]:
+    """Return the trial's audio chunks and wrench samples in log-time order within a span."""
+    events = []
+    starts = np.concatenate([[0], trial.chunk_ends[:-1]])
+    for lo, hi, t in zip(starts, trial.chunk_ends, trial.chunk_log_t):
+        events.append(Event(float(t), 'audio', int(lo), int(hi)))
+    log_t = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
+    for j, t in enumerate(log_t):
+        events.append(Event(float(t), 'wrench', j, j + 1))
+    events.sort(key=lambda e: (e.t, e.kind == 'audio'))
+    return [e for e in events if t_from <= e.t < t_to]
+
+
+def trial_features(trial: Trial, config: FeatureConfig) -> tuple:
+    """Feature frames of a trial fed as the node would (audio stamped with its log time)."""
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=trial.audio_rate,
+                                          ft_input_rate=trial.ft_rate)
+    blocks = []
+    for e in trial_events(trial):
+        if e.kind == 'audio':
+            blocks.append(extractor.push_audio(trial.audio[e.lo:e.hi], stamp=e.t))
+        else:
+            blocks.append(extractor.push_wrench(t=trial.wrench_t[e.lo:e.hi],
+                                                force=trial.force[e.lo:e.hi],
+                                                torque=trial.torque[e.lo:e.hi]))
+    blocks.append(extractor.flush())
+    blocks = [b for b in blocks if len(b)]
+    return (np.concatenate([b.t for b in blocks]), np.concatenate([b.x for b in blocks]),
+            np.concatenate([b.valid for b in blocks]))
+
+
+def trial_features_fast(trial: Trial, config: FeatureConfig) -> tuple:
+    """Feature frames of a trial from two big pushes (the whole wrench, then the audio)."""
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=trial.audio_rate,
+                                          ft_input_rate=trial.ft_rate, history_s=60.0)
+    extractor.push_wrench(t=trial.wrench_t, force=trial.force, torque=trial.torque)
+    frames = extractor.push_audio(trial.audio,
+                                  stamp=float(trial.audio_time(trial.audio.size - 1)))
+    return frames.t, frames.x, frames.valid
+
+
+def train_test_model(path: Path, *, n_trials: int = TRAIN_TRIALS,
+                     audio_rate: int = 16000) -> Path:
+    """Fit an 8-tree forest on simulated trials and save it (with its card) at ``path``."""
+    config = FeatureConfig()
+    xs, ys = [], []
+    for i in range(n_trials):
+        trial = simulate_trial(seed=TRAIN_SEED, index=i, audio_rate=audio_rate,
+                               hits=('hand', 'table', 'none')[i % 3])
+        t, x, valid = trial_features_fast(trial, config)
+        y = (t >= trial.onset_t) & (t < trial.onset_t + LABEL_WINDOW_S)
+        xs.append(x[valid])
+        ys.append(y[valid])
+    forest = RandomForestClassifier(n_estimators=8, max_features='sqrt', min_samples_leaf=2,
+                                    random_state=0)
+    forest.fit(np.concatenate(xs), np.concatenate(ys).astype(int))
+    bundle = ModelBundle(forest=forest, feature_config=config,
+                         feature_names=config.feature_names,
+                         feature_schema_version=FEATURE_SCHEMA_VERSION,
+                         label_window={'start_s': 0.0, 'end_s': LABEL_WINDOW_S},
+                         decision_rule=TEST_RULE, versions=runtime_versions(),
+                         training={'source': 'test fixture', 'trials': n_trials},
+                         created=datetime(2026, 1, 1).isoformat())
+    return save_bundle(bundle=bundle, path=Path(path))
+
+
+def model_path(directory: Path, *, allow_shipped: bool = True) -> Path:
+    """Return the shipped model if there is one, else a test model (trained once per process)."""
+    if allow_shipped and SHIPPED_MODEL.is_file():
+        return SHIPPED_MODEL
+    if 'model' not in _cache or not _cache['model'].is_file():
+        _cache['model'] = train_test_model(Path(directory) / 'test_forest.joblib')
+    return _cache['model']
+
+
+def uses_shipped(path: Optional[Path]) -> bool:
+    """Whether ``path`` is the shipped model."""
+    return path is not None and Path(path).resolve() == SHIPPED_MODEL.resolve()

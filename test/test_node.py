@@ -1,0 +1,429 @@
+"""The live node in-process, with real rclpy: topics, services, parameters, bad input, time.
+
+Every test gets its own rclpy context. Messages go through DDS (loopback, see conftest.py);
+time is simulated (``use_sim_time``, the test publishes ``/clock`` like ``ros2 bag play
+--clock``), so a trial is fed as fast as the node takes it and the node's per-frame output
+can be compared with :class:`ContactDetector` run offline on the same arrays and stamps.
+"""
+
+import os
+from pathlib import Path
+import subprocess
+import sys
+import time
+
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Bool, Float32, Float32MultiArray, Int16MultiArray
+from std_srvs.srv import SetBool, Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from contact_detector.detection.detector import ContactDetector
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.model.bundle import load_bundle
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.sim.trial import simulate_trial
+import node_support
+
+TICK_S = 0.01              # /clock period of the simulated bag player
+TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
+
+
+@pytest.fixture(scope='module')
+def model(tmp_path_factory):
+    return node_support.model_path(tmp_path_factory.mktemp('model'))
+
+
+@pytest.fixture(scope='module')
+def trial():
+    return simulate_trial(**TRIAL)
+
+
+@pytest.fixture
+def context():
+    ctx = Context()
+    rclpy.init(context=ctx)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+def stamp(t: float) -> Time:
+    sec = int(np.floor(t))
+    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+
+
+def wrench_msg(t, force, torque) -> WrenchStamped:
+    msg = WrenchStamped()
+    msg.header.stamp = stamp(float(t))
+    msg.header.frame_id = 'wrist_ft_sensor_frame'
+    f, m = msg.wrench.force, msg.wrench.torque
+    f.x, f.y, f.z = (float(v) for v in force)
+    m.x, m.y, m.z = (float(v) for v in torque)
+    return msg
+
+
+class Harness:
+    """The node under test plus a helper node that feeds it and records what it publishes."""
+
+    def __init__(self, context, model, *, audio_type=Int16MultiArray, **params):
+        values = {'model.path': str(model), 'use_sim_time': True,
+                  'qos.reliability': 'reliable', 'qos.depth': 1000,
+                  'diagnostics.period_s': 0.5}
+        values.update(params)
+        self.node = ContactDetectorNode(
+            context=context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in values.items()])
+        self.io = rclpy.create_node('test_io', context=context)
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self.clock_pub = self.io.create_publisher(Clock, '/clock', 10)
+        self.wrench_pub = self.io.create_publisher(WrenchStamped, 'wrist_wrench', reliable)
+        self.audio_pub = self.io.create_publisher(audio_type, 'audio', reliable)
+        self.contact, self.prob, self.release, self.diag, self.gripper = [], [], [], [], []
+        for msg_type, topic, sink in ((Bool, 'contact', self.contact),
+                                      (Float32, 'contact_probability', self.prob),
+                                      (Bool, 'release', self.release),
+                                      (DiagnosticArray, '/diagnostics', self.diag),
+                                      (JointTrajectory, '/gripper_controller/joint_trajectory',
+                                       self.gripper)):
+            self.io.create_subscription(msg_type, topic, sink.append, reliable)
+        self.arm = self.io.create_client(SetBool, 'contact_detector/arm')
+        self.reset = self.io.create_client(Trigger, 'contact_detector/reset')
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.io)
+        self.clock_t = None
+        self.spin_until(lambda: all(p.get_subscription_count() > 0 for p in (
+            self.clock_pub, self.wrench_pub, self.audio_pub)) and len(
+            self.io.get_publishers_info_by_topic('/release')) > 0)
+
+    def spin_until(self, predicate, timeout=10.0):
+        end = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > end:
+                raise AssertionError('timed out waiting for the node')
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def set_clock(self, t: float) -> None:
+        self.clock_pub.publish(Clock(clock=stamp(t)))
+        target = stamp(t)
+        want = target.sec * 1_000_000_000 + target.nanosec
+        self.spin_until(lambda: self.node.get_clock().now().nanoseconds == want)
+        self.clock_t = t
+
+    def send_wrench(self, msg) -> None:
+        n = self.node.wrench.received
+        self.wrench_pub.publish(msg)
+        self.spin_until(lambda: self.node.wrench.received > n)
+
+    def send_audio(self, msg) -> None:
+        n = self.node.audio.received
+        self.audio_pub.publish(msg)
+        self.spin_until(lambda: self.node.audio.received > n)
+
+    def feed(self, trial, events, *, offset=0.0, wrench_offset=0.0):
+        """
+        Feed events in order, /clock stepping in TICK_S; return the (receive time, event) list.
+
+        ``offset`` shifts the clock and every stamp, ``wrench_offset`` the wrench stamps only.
+        """
+        fed = []
+        for e in events:
+            tick = offset + np.floor((e.t - trial.start_time) / TICK_S) * TICK_S \
+                + trial.start_time
+            if self.clock_t is None or tick > self.clock_t + 1e-9:
+                self.set_clock(tick)
+            if e.kind == 'audio':
+                self.send_audio(Int16MultiArray(data=trial.audio[e.lo:e.hi].tolist()))
+            else:
+                j = e.lo
+                self.send_wrench(wrench_msg(trial.wrench_t[j] + offset + wrench_offset,
+                                            trial.force[j], trial.torque[j]))
+            fed.append((self.clock_t, e))
+        return fed
+
+    def flush_outputs(self):
+        """Spin until every published frame has arrived at the helper node."""
+        frames = self.node.detector_counts()['contact_msgs']
+        self.spin_until(lambda: len(self.contact) >= frames and len(self.prob) >= frames)
+        for _ in range(20):
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def call(self, client, request):
+        assert client.wait_for_service(timeout_sec=5.0)
+        future = client.call_async(request)
+        self.spin_until(future.done)
+        return future.result()
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.io.destroy_node()
+
+
+@pytest.fixture
+def harness_factory(context, model):
+    made = []
+
+    def make(**kwargs):
+        made.append(Harness(context, model, **kwargs))
+        return made[-1]
+    yield make
+    for h in made:
+        h.close()
+
+
+def offline_run(model, trial, fed, **settings):
+    """The same arrays and stamps through ContactDetector directly (no ROS)."""
+    bundle = load_bundle(path=model)
+    from contact_detector.detection.detector import DetectorSettings
+    det = ContactDetector(bundle=bundle, settings=DetectorSettings(
+        audio_rate=trial.audio_rate, wrench_rate=trial.ft_rate, **settings))
+    p, contact, releases = [], [], []
+    for now, e in fed:
+        if e.kind == 'audio':
+            d = det.on_audio(trial.audio[e.lo:e.hi], stamp=now, now=now)
+        else:
+            d = det.on_wrench(t=trial.wrench_t[e.lo:e.hi], force=trial.force[e.lo:e.hi],
+                              torque=trial.torque[e.lo:e.hi], now=now)
+        p.extend(d.p)
+        contact.extend(d.contact)
+        releases.extend(d.releases)
+    return np.array(p), np.array(contact, dtype=bool), releases
+
+
+def diag_values(harness):
+    status = harness.diag[-1].status[0]
+    return status, {kv.key: kv.value for kv in status.values}
+
+
+# --- a trial end to end --------------------------------------------------------------------------
+
+def test_trial_frames_and_single_release(harness_factory, model, trial):
+    h = harness_factory(**{'gripper.enabled': True})
+    events = node_support.trial_events(trial, t_from=trial.onset_t - 2.5,
+                                       t_to=trial.onset_t + 1.5)
+    fed = h.feed(trial, events)
+    h.flush_outputs()
+    p, contact, releases = offline_run(model, trial, fed)
+    counts = h.node.detector_counts()
+    # One Bool and one Float32 per audio frame, equal to the offline detector's decisions.
+    assert counts['frames'] == len(p) == len(h.contact) == len(h.prob) > 300
+    np.testing.assert_array_equal([m.data for m in h.contact], contact)
+    np.testing.assert_array_equal([m.data for m in h.prob], p.astype(np.float32))
+    # Exactly one release, after the true onset; in-air hits (before it) released nothing.
+    assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.3
+    assert [m.data for m in h.release] == [True]
+    assert counts['releases'] == 1 and not h.node.detector.armed
+    assert h.gripper[0].joint_names == ['hand_motor_joint']
+    assert h.gripper[0].points[0].positions[0] == pytest.approx(1.2)
+    status, values = diag_values(h)
+    assert values['model_id'] == load_bundle(path=model).model_id
+    assert float(values['latency_p99_ms']) > 0
+    assert values['audio_dropped'] == '0' and values['callback_errors'] == '0'
+    assert float(values['wrench_age_s']) < 0.1
+
+
+def test_arm_and_reset_services(harness_factory, trial):
+    h = harness_factory(**{'release.armed_on_start': False})
+    span = dict(t_from=trial.onset_t - 1.5, t_to=trial.onset_t + 0.5)
+    h.feed(trial, node_support.trial_events(trial, **span))
+    h.flush_outputs()
+    counts = h.node.detector_counts()
+    assert counts['events'] >= 1 and counts['releases'] == 0 and h.release == []
+
+    assert h.call(h.arm, SetBool.Request(data=True)).success
+    assert h.node.detector.armed
+    reply = h.call(h.reset, Trigger.Request())
+    assert reply.success and 'armed' in reply.message
+    assert h.node.detector.extractor.pending == 0
+    # The same contact replayed 100 s later (a second trial run): now armed, one release.
+    h.feed(trial, node_support.trial_events(trial, **span), offset=100.0)
+    h.flush_outputs()
+    assert [m.data for m in h.release] == [True]
+    assert h.node.detector_counts()['releases'] == 1 and not h.node.detector.armed
+    assert h.call(h.arm, SetBool.Request(data=False)).message == 'release disarmed'
+
+
+# --- parameters ------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize('params, match', [
+    ({'audio.sample_rate': 100.0}, 'audio.sample_rate'),
+    ({'audio.sample_rate': 44100}, 'audio.sample_rate.*decimal point'),
+    ({'audio.msg_type': 'sensor_msgs/msg/Image'}, 'audio.msg_type'),
+    ({'audio.channels': 2, 'audio.channel': 2}, 'audio.channel=2'),
+    ({'audio.stamp_source': 'header'}, 'audio.stamp_source'),
+    ({'qos.reliability': 'sometimes'}, 'qos.reliability'),
+    ({'release.threshold': 1.5}, 'release.threshold'),
+    ({'wrench.rate': 150.0}, 'integer multiple'),
+])
+def test_invalid_parameters_refused_at_start(context, model, params, match):
+    overrides = [Parameter('model.path', value=str(model))]
+    overrides += [Parameter(k, value=v) for k, v in params.items()]
+    with pytest.raises(ConfigError, match=match):
+        ContactDetectorNode(context=context, parameter_overrides=overrides)
+
+
+def test_parameters_at_run_time(harness_factory):
+    h = harness_factory()
+    node = h.node
+    base = node.bundle.decision_rule
+
+    def set_(name, value):
+        return node.set_parameters([Parameter(name, value=value)])[0]
+
+    refused = set_('release.threshold', 1.5)
+    assert not refused.successful and 'release.threshold' in refused.reason
+    assert not set_('release.confirm_frames', -2).successful
+    assert not set_('audio.sample_rate', 44100.0).successful        # read-only
+    assert not set_('qos.reliability', 'best_effort').successful    # read-only
+    assert not set_('gripper.joint', ' ').successful
+    assert node.detector.rule == base
+
+    assert set_('release.threshold', 0.8).successful
+    assert set_('release.confirm_frames', 3).successful
+    assert (node.detector.rule.threshold, node.detector.rule.confirm_frames) == (0.8, 3)
+    assert node.detector.logic.rule == node.detector.rule
+    assert set_('release.threshold', -1.0).successful               # back to the model's
+    assert node.detector.rule.threshold == base.threshold
+    assert set_('max_input_delay_s', 0.25).successful
+    assert node.detector.settings.max_input_delay_s == 0.25
+    assert set_('diagnostics.period_s', 2.0).successful
+    assert node.get_parameter('release.confirm_frames').value == 3
+
+
+def test_missing_audio_common_package(context, model):
+    try:
+        import audio_common_msgs  # noqa: F401
+        pytest.skip('audio_common_msgs is installed here')
+    except ImportError:
+        pass
+    for msg_type in ('audio_common_msgs/msg/AudioData', 'audio_common_msgs/msg/AudioStamped'):
+        overrides = [Parameter('model.path', value=str(model)),
+                     Parameter('audio.msg_type', value=msg_type)]
+        with pytest.raises(ConfigError, match="package 'audio_common_msgs'.*not installed"):
+            ContactDetectorNode(context=context, parameter_overrides=overrides)
+
+
+def test_main_exits_non_zero_with_a_clear_message(tmp_path):
+    env = dict(os.environ)
+    repo = Path(__file__).resolve().parents[1]
+    cmd = [sys.executable, '-m', 'contact_detector.ros.node', '--ros-args',
+           '-p', f'model.path:={tmp_path / "missing.joblib"}']
+    done = subprocess.run(cmd, env=env, cwd=repo, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    assert 'cannot start' in done.stderr and 'missing.joblib does not exist' in done.stderr
+
+
+def test_bad_model_is_a_model_error(context, tmp_path):
+    bad = tmp_path / 'bad.joblib'
+    bad.write_bytes(b'not a model')
+    with pytest.raises(ModelError):
+        ContactDetectorNode(context=context,
+                            parameter_overrides=[Parameter('model.path', value=str(bad))])
+
+
+# --- bad input ---------------------------------------------------------------------------------
+
+def test_bad_messages_are_counted_and_never_release(harness_factory, trial):
+    h = harness_factory(**{'audio.channels': 2, 'audio.channel': -1,
+                           'audio.max_chunk_s': 0.5})
+    events = node_support.trial_events(trial, t_from=trial.onset_t - 1.5,
+                                       t_to=trial.onset_t + 0.5)
+    n_audio = 0
+
+    def stereo(e):
+        mono = trial.audio[e.lo:e.hi]
+        return Int16MultiArray(data=np.repeat(mono, 2).tolist())
+
+    bad_audio = [Int16MultiArray(data=[]),                            # empty chunk
+                 Int16MultiArray(data=[1, 2, 3]),                     # not a multiple of 2
+                 Int16MultiArray(data=[0] * 40000)]                   # 1.25 s: too long
+    for e in events:
+        tick = np.floor((e.t - trial.start_time) / TICK_S) * TICK_S + trial.start_time
+        if h.clock_t is None or tick > h.clock_t + 1e-9:
+            h.set_clock(tick)
+        if e.kind == 'audio':
+            n_audio += 1
+            h.send_audio(stereo(e))
+            # Near the onset a corrupt message every 5th chunk keeps releases blocked.
+            if e.t > trial.onset_t - 0.5 and n_audio % 5 == 0:
+                h.send_audio(bad_audio[n_audio % 3])
+        else:
+            j = e.lo
+            good = wrench_msg(trial.wrench_t[j], trial.force[j], trial.torque[j])
+            h.send_wrench(good)
+            if j % 25 == 0:
+                h.send_wrench(good)                                   # duplicate
+                h.send_wrench(wrench_msg(trial.wrench_t[j], [np.nan, 0, 0], [0, 0, 0]))
+                h.send_wrench(wrench_msg(trial.wrench_t[j] + 30.0, trial.force[j],
+                                         trial.torque[j]))            # from the future
+    h.flush_outputs()
+    counts = h.node.detector_counts()
+    assert counts['audio_dropped'] >= 10 and counts['wrench_dropped'] >= 10
+    assert counts['bad_stamps'] >= 5
+    assert counts['callback_errors'] == 0
+    assert counts['frames'] > 100            # the good stereo input was mixed and decided
+    assert counts['releases'] == 0 and h.release == []
+    h.spin_until(lambda: any(s.status[0].level == DiagnosticStatus.WARN for s in h.diag))
+    warn = [s.status[0] for s in h.diag if s.status[0].level == DiagnosticStatus.WARN]
+    assert any('audio_dropped' in s.message or 'wrench_dropped' in s.message for s in warn)
+
+
+def test_float32_audio_with_nan_is_dropped(harness_factory, trial):
+    h = harness_factory(**{'audio.msg_type': 'std_msgs/msg/Float32MultiArray'},
+                        audio_type=Float32MultiArray)
+    h.set_clock(trial.start_time + 1.0)
+    h.send_audio(Float32MultiArray(data=[0.1, float('nan')]))
+    h.send_audio(Float32MultiArray(data=[0.1, 0.2]))
+    counts = h.node.detector_counts()
+    assert counts['audio_dropped'] == 1 and counts['audio_msgs'] == 1
+    assert 'NaN' in h.node.detector.last_error
+
+
+# --- time ----------------------------------------------------------------------------------------
+
+def test_time_jump_backwards_resets_and_recovers(harness_factory, trial):
+    h = harness_factory()
+    span = node_support.trial_events(trial, t_from=trial.start_time + 1.0,
+                                     t_to=trial.start_time + 2.5)
+    h.feed(trial, span)
+    before = h.node.detector_counts()
+    assert before['frames'] > 50 and before['clock_jumps'] == 0
+    # A bag loop: /clock and every stamp go back to the start of the span.
+    h.clock_t = None
+    h.feed(trial, span)
+    h.flush_outputs()
+    looped = h.node.detector_counts()
+    assert looped['clock_jumps'] == 1 and looped['callback_errors'] == 0
+    assert looped['frames'] > before['frames'] + 50          # decisions again after warm-up
+    # The wrench driver restarts with stamps 30 s back while the clock goes on.
+    h.feed(trial, span, offset=10.0, wrench_offset=-30.0)
+    h.flush_outputs()
+    after = h.node.detector_counts()
+    assert after['time_jumps'] >= 1 and after['callback_errors'] == 0
+    assert after['frames'] > looped['frames'] + 50            # invalid (stale F/T), not stuck
+    assert after['releases'] == 0
+
+
+def test_44k_audio_without_retraining(harness_factory, model):
+    trial = simulate_trial(audio_rate=44100, **TRIAL)
+    h = harness_factory(**{'audio.sample_rate': 44100.0})
+    events = node_support.trial_events(trial, t_from=trial.onset_t - 1.0,
+                                       t_to=trial.onset_t + 0.5)
+    fed = h.feed(trial, events)
+    h.flush_outputs()
+    p, contact, releases = offline_run(model, trial, fed)
+    assert h.node.detector_counts()['frames'] == len(h.prob) == len(p) > 140
+    np.testing.assert_array_equal([m.data for m in h.prob], p.astype(np.float32))
+    assert len(h.release) == len(releases)
+    if not node_support.uses_shipped(model):
+        assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.3
