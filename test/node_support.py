@@ -11,12 +11,9 @@ from pathlib import Path
 from typing import List, Optional
 
 import numpy as np
-from sklearn.ensemble import RandomForestClassifier
 
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
-from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
-                                           save_bundle)
 from contact_detector.sim.trial import simulate_trial, Trial
 
 REPO = Path(__file__).resolve().parents[1]
@@ -25,7 +22,7 @@ SHIPPED_MODEL = REPO / 'models' / 'contact_forest.joblib'
 TRAIN_SEED = 7
 TRAIN_TRIALS = 12
 LABEL_WINDOW_S = 0.1
-TEST_RULE = DecisionRule(threshold=0.5, confirm_frames=2, refractory_s=1.0)
+TEST_RULE = dict(threshold=0.5, confirm_frames=2, refractory_s=1.0)
 
 _cache: dict = {}
 
@@ -85,6 +82,11 @@ def trial_features_fast(trial: Trial, config: FeatureConfig) -> tuple:
 def train_test_model(path: Path, *, n_trials: int = TRAIN_TRIALS,
                      audio_rate: int = 16000) -> Path:
     """Fit an 8-tree forest on simulated trials and save it (with its card) at ``path``."""
+    # scikit-learn and the bundle are imported here: the e2e publisher does not need them.
+    from sklearn.ensemble import RandomForestClassifier
+
+    from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
+                                               save_bundle)
     config = FeatureConfig()
     xs, ys = [], []
     for i in range(n_trials):
@@ -101,7 +103,7 @@ def train_test_model(path: Path, *, n_trials: int = TRAIN_TRIALS,
                          feature_names=config.feature_names,
                          feature_schema_version=FEATURE_SCHEMA_VERSION,
                          label_window={'start_s': 0.0, 'end_s': LABEL_WINDOW_S},
-                         decision_rule=TEST_RULE, versions=runtime_versions(),
+                         decision_rule=DecisionRule(**TEST_RULE), versions=runtime_versions(),
                          training={'source': 'test fixture', 'trials': n_trials},
                          created=datetime(2026, 1, 1).isoformat())
     return save_bundle(bundle=bundle, path=Path(path))

@@ -13,7 +13,8 @@ from contact_detector.errors import BagError
 from contact_detector.io.bags import (find_bags, iter_messages, jazzy_typestore, manifest_entry,
                                       open_reader, read_audio, read_manifest, read_truth,
                                       read_wrench, topic_types)
-from contact_detector.sim.bag_writer import write_manifest, write_trial_bag
+from contact_detector.sim.bag_writer import (int16_multiarray_cdr, wrench_cdr, write_manifest,
+                                             write_trial_bag)
 from contact_detector.sim.trial import simulate_trial
 
 AUDIO_DATA = 'audio_common_msgs/msg/AudioData'
@@ -146,3 +147,35 @@ def test_broken_bags_raise_bag_error(tmp_path):
         list(iter_messages(bag))
     with pytest.raises(BagError):
         read_wrench(tmp_path / 'broken')
+
+
+def test_fast_cdr_matches_typestore():
+    store = jazzy_typestore()
+    types = store.types
+    rng = np.random.default_rng(0)
+    stamps = np.array([1_700_000_000_000_000_000, 1_700_000_000_123_456_789, 5])
+    force, torque = rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
+    raw = wrench_cdr(stamp_ns=stamps, force=force, torque=torque)
+    for i, ns in enumerate(stamps.tolist()):
+        msg = types['geometry_msgs/msg/WrenchStamped'](
+            header=types['std_msgs/msg/Header'](
+                stamp=types['builtin_interfaces/msg/Time'](sec=ns // 10**9,
+                                                           nanosec=ns % 10**9),
+                frame_id='wrist_ft_sensor_frame'),
+            wrench=types['geometry_msgs/msg/Wrench'](
+                force=types['geometry_msgs/msg/Vector3'](x=force[i, 0], y=force[i, 1],
+                                                         z=force[i, 2]),
+                torque=types['geometry_msgs/msg/Vector3'](x=torque[i, 0], y=torque[i, 1],
+                                                          z=torque[i, 2])))
+        assert raw[i].tobytes() == bytes(store.serialize_cdr(
+            msg, 'geometry_msgs/msg/WrenchStamped'))
+    for n in (0, 1, 3, 160):
+        data = rng.integers(-32768, 32768, n).astype(np.int16)
+        msg = types['std_msgs/msg/Int16MultiArray'](
+            layout=types['std_msgs/msg/MultiArrayLayout'](
+                dim=[types['std_msgs/msg/MultiArrayDimension'](label='samples', size=n,
+                                                               stride=n)],
+                data_offset=0),
+            data=data)
+        assert int16_multiarray_cdr(data) == bytes(store.serialize_cdr(
+            msg, 'std_msgs/msg/Int16MultiArray'))

@@ -110,7 +110,9 @@ configs = st.builds(
     ft_hop=st.sampled_from([1, 2, 5]),
     ft_window_fn=st.sampled_from(['rect', 'hann']),
     ft_detrend=st.sampled_from(['none', 'mean']),
-    extra_features=st.sampled_from([(), ('audio_power_rel_db', 'force_delta', 'torque_delta')]),
+    extra_features=st.sampled_from([
+        (), ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta'),
+        ('audio_peak_rel_db',)]),
 )
 
 

@@ -302,12 +302,11 @@ def test_rosbags_mgonzs13_and_std_msgs():
         ('float32_data', np.float32), ('int32_data', np.int32), ('int24_data', np.int32),
         ('int16_data', np.int16), ('int8_data', np.int8), ('uint8_data', np.uint8))}
     empty['float32_data'] = np.array([0.25, -0.5, 0.75, 0.0], dtype=np.float32)
-    msg = t[AS](header=t['std_msgs/msg/Header'](
-        stamp=t['builtin_interfaces/msg/Time'](sec=1, nanosec=0), frame_id=''),
-        audio=t['audio_common_msgs/msg/Audio'](
-            info=t['audio_common_msgs/msg/AudioInfo'](format=1, channels=2, rate=44100,
-                                                     chunk=2),
-            audio_data=t[AD](**empty)))
+    info = t['audio_common_msgs/msg/AudioInfo'](format=1, channels=2, rate=44100, chunk=2)
+    head = t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](sec=1, nanosec=0),
+                                    frame_id='')
+    msg = t[AS](header=head, audio=t['audio_common_msgs/msg/Audio'](
+        info=info, audio_data=t[AD](**empty)))
     back = _roundtrip(store, msg, AS)
     out = audio_to_samples(back, msg_type=AS, channels=1, channel=None)
     np.testing.assert_allclose(out, [-0.125, 0.375])

@@ -30,7 +30,9 @@ from trajectory_msgs.msg import JointTrajectory
 from contact_detector.detection.detector import ContactDetector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.model.bundle import load_bundle
+from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.ros.params import PARAMS
 from contact_detector.sim.trial import simulate_trial
 import node_support
 
@@ -74,7 +76,8 @@ def wrench_msg(t, force, torque) -> WrenchStamped:
 class Harness:
     """The node under test plus a helper node that feeds it and records what it publishes."""
 
-    def __init__(self, context, model, *, audio_type=Int16MultiArray, **params):
+    def __init__(self, context, model, *, audio_type=Int16MultiArray, executor='single',
+                 **params):
         values = {'model.path': str(model), 'use_sim_time': True,
                   'qos.reliability': 'reliable', 'qos.depth': 1000,
                   'diagnostics.period_s': 0.5}
@@ -97,7 +100,11 @@ class Harness:
             self.io.create_subscription(msg_type, topic, sink.append, reliable)
         self.arm = self.io.create_client(SetBool, 'contact_detector/arm')
         self.reset = self.io.create_client(Trigger, 'contact_detector/reset')
-        self.executor = SingleThreadedExecutor(context=context)
+        if executor == 'hot_path':
+            self.executor = HotPathExecutor(hot=self.node.subscriptions, poll_s=0.01,
+                                            context=context)
+        else:
+            self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.executor.add_node(self.io)
         self.clock_t = None
@@ -232,8 +239,9 @@ def test_trial_frames_and_single_release(harness_factory, model, trial):
     assert float(values['wrench_age_s']) < 0.1
 
 
-def test_arm_and_reset_services(harness_factory, trial):
-    h = harness_factory(**{'release.armed_on_start': False})
+@pytest.mark.parametrize('executor', ['single', 'hot_path'])
+def test_arm_and_reset_services(harness_factory, trial, executor):
+    h = harness_factory(executor=executor, **{'release.armed_on_start': False})
     span = dict(t_from=trial.onset_t - 1.5, t_to=trial.onset_t + 0.5)
     h.feed(trial, node_support.trial_events(trial, **span))
     h.flush_outputs()
@@ -253,7 +261,7 @@ def test_arm_and_reset_services(harness_factory, trial):
     assert h.call(h.arm, SetBool.Request(data=False)).message == 'release disarmed'
 
 
-# --- parameters ------------------------------------------------------------------------------------
+# --- parameters ----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize('params, match', [
     ({'audio.sample_rate': 100.0}, 'audio.sample_rate'),
@@ -270,6 +278,34 @@ def test_invalid_parameters_refused_at_start(context, model, params, match):
     overrides += [Parameter(k, value=v) for k, v in params.items()]
     with pytest.raises(ConfigError, match=match):
         ContactDetectorNode(context=context, parameter_overrides=overrides)
+
+
+def test_params_file_documents_every_parameter(model):
+    import yaml
+    path = Path(__file__).resolve().parents[1] / 'params' / 'contact_detector.yaml'
+    tree = yaml.safe_load(path.read_text())['/**']['ros__parameters']
+
+    def flat(node, prefix=''):
+        for key, value in node.items():
+            if isinstance(value, dict):
+                yield from flat(value, f'{prefix}{key}.')
+            else:
+                yield f'{prefix}{key}', value
+    values = dict(flat(tree))
+    assert list(values) == [spec.name for spec in PARAMS]
+    for spec in PARAMS:
+        assert type(values[spec.name]) is type(spec.default), spec.name
+        assert values[spec.name] == spec.default, spec.name
+    # rclpy reads the file: the node starts with it (model path overridden after it).
+    ctx = Context()
+    rclpy.init(context=ctx, args=['--ros-args', '--params-file', str(path),
+                                  '-p', f'model.path:={model}', '-p', 'release.threshold:=0.7'])
+    try:
+        node = ContactDetectorNode(context=ctx)
+        assert node.config.release_threshold == 0.7 and node.detector.rule.threshold == 0.7
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
 
 
 def test_parameters_at_run_time(harness_factory):
@@ -298,6 +334,24 @@ def test_parameters_at_run_time(harness_factory):
     assert node.detector.settings.max_input_delay_s == 0.25
     assert set_('diagnostics.period_s', 2.0).successful
     assert node.get_parameter('release.confirm_frames').value == 3
+
+
+def test_stream_rate_change_rebuilds_the_detector(harness_factory, trial):
+    # What an audio_info / AudioStamped announcing another rate does (audio_common is not
+    # installed here, so the rebuild is driven directly).
+    h = harness_factory(**{'release.armed_on_start': False})
+    h.feed(trial, node_support.trial_events(trial, t_from=trial.start_time + 1.0,
+                                            t_to=trial.start_time + 1.5))
+    frames = h.node.detector_counts()['frames']
+    h.node.detector.arm(True)
+    h.node._set_audio_rate(48000.0)
+    assert h.node.detector.settings.audio_rate == 48000.0 and h.node.detector.armed
+    counts = h.node.detector_counts()
+    assert counts['frames'] == frames and counts['detector_rebuilds'] == 1
+    h.node._set_audio_rate(50.0)                     # unsupported: the stream is refused
+    assert 'audio at 50 Hz' in h.node.audio_refused
+    h.send_audio(Int16MultiArray(data=[0] * 160))
+    assert h.node.detector_counts()['audio_refused'] == 1
 
 
 def test_missing_audio_common_package(context, model):
@@ -331,7 +385,7 @@ def test_bad_model_is_a_model_error(context, tmp_path):
                             parameter_overrides=[Parameter('model.path', value=str(bad))])
 
 
-# --- bad input ---------------------------------------------------------------------------------
+# --- bad input -----------------------------------------------------------------------------------
 
 def test_bad_messages_are_counted_and_never_release(harness_factory, trial):
     h = harness_factory(**{'audio.channels': 2, 'audio.channel': -1,
@@ -376,6 +430,24 @@ def test_bad_messages_are_counted_and_never_release(harness_factory, trial):
     h.spin_until(lambda: any(s.status[0].level == DiagnosticStatus.WARN for s in h.diag))
     warn = [s.status[0] for s in h.diag if s.status[0].level == DiagnosticStatus.WARN]
     assert any('audio_dropped' in s.message or 'wrench_dropped' in s.message for s in warn)
+
+
+def test_stereo_read_as_mono_is_refused(harness_factory, trial):
+    h = harness_factory()                                   # audio.channels: 1
+    for e in node_support.trial_events(trial, t_from=trial.onset_t - 1.5,
+                                       t_to=trial.onset_t + 0.5):
+        tick = np.floor((e.t - trial.start_time) / TICK_S) * TICK_S + trial.start_time
+        if h.clock_t is None or tick > h.clock_t + 1e-9:
+            h.set_clock(tick)
+        if e.kind == 'audio':
+            h.send_audio(Int16MultiArray(data=np.repeat(trial.audio[e.lo:e.hi], 2).tolist()))
+        else:
+            h.send_wrench(wrench_msg(trial.wrench_t[e.lo], trial.force[e.lo],
+                                     trial.torque[e.lo]))
+    h.flush_outputs()
+    counts = h.node.detector_counts()
+    assert counts['audio_rate_mismatch'] > 50 and counts['releases'] == 0
+    assert 'rate' in h.node.detector.last_error
 
 
 def test_float32_audio_with_nan_is_dropped(harness_factory, trial):

@@ -207,8 +207,10 @@ def run_demo(*, trials: int, seed: int, out: Path, model: Path, figure: Path) ->
             collector.clear()
             records = read_recording(out / trial.name)
             starts = {}
-            player.play(records, on_start=lambda bag0, wall0: starts.update(bag0=bag0,
-                                                                             wall0=wall0))
+
+            def remember(bag0, wall0):
+                starts.update(bag0=bag0, wall0=wall0)
+            player.play(records, on_start=remember)
             time.sleep(0.3)
             wall0 = starts['wall0'] - (starts['bag0'] - trial.start_time)
             with collector.lock:
@@ -250,11 +252,13 @@ def run_demo(*, trials: int, seed: int, out: Path, model: Path, figure: Path) ->
     summary = summarize(outcomes)
     if outcomes:
         median = summary['latency_ms_median']
-        print(f"\n{summary['detected']}/{summary['trials']} contacts detected, "
-              f"{summary['premature']} premature, {summary['missed'] + summary['late']} missed"
-              f", median latency {'-' if median is None else f'{median:.0f} ms'}; "
-              f"{sum(o.impacts for o in outcomes)} exogenous hits, "
-              f"{sum(o.impacts_in_air for o in outcomes)} while the glass was in the air")
+        latency = '-' if median is None else f'{median:.0f} ms'
+        missed = summary['missed'] + summary['late']
+        hits = sum(o.impacts for o in outcomes)
+        in_air = sum(o.impacts_in_air for o in outcomes)
+        print(f'\n{summary["detected"]}/{summary["trials"]} contacts detected, '
+              f'{summary["premature"]} premature, {missed} missed, median latency {latency}; '
+              f'{hits} exogenous hits, {in_air} while the glass was in the air')
     if summary.get('premature'):
         failures.append(f"{summary['premature']} premature release(s)")
     if summary.get('missed') or summary.get('late'):

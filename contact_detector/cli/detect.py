@@ -24,6 +24,7 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.errors import ConfigError, ContactDetectorError
 from contact_detector.io.bags import find_bags
+from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
 from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
 
@@ -82,14 +83,19 @@ def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
         audio_rate=float(audio_rate or params.get('audio.sample_rate', 16000)),
         wrench_rate=float(params.get('wrench.rate', 100.0)),
         max_input_delay_s=float(params.get('max_input_delay_s', 0.5)),
+        max_ft_wait_s=float(params.get('max_ft_wait_s', 0.25)),
         warmup_s=float(params.get('warmup_s', 0.5)),
+        corrupt_holdoff_s=float(params.get('corrupt_holdoff_s', 0.2)),
     )
     age = params.get('max_ft_age_s', 0.0)
     if age and age > 0:
         settings['max_ft_age_s'] = float(age)
     channel = int(params.get('audio.channel', -1))
+    # The bag's audio must have the node's type (the node would not even subscribe otherwise).
+    msg_type = params.get('audio.msg_type')
     stream = dict(channels=int(params.get('audio.channels', 1)),
-                  channel=None if channel < 0 else channel)
+                  channel=None if channel < 0 else channel,
+                  audio_msg_type=normalise_msg_type(msg_type) if msg_type else None)
     return settings, stream, params.get('model.path', ''), rule
 
 

@@ -1,13 +1,16 @@
 """``contact-detector replay``: publish a bag into the live ROS graph with its original timing.
 
     contact-detector replay BAG [--rate R] [--loop] [--clock] [--restamp] [--topics T ...]
+                                [--wait-for-subscribers S]
 
 For machines without ``ros2 bag``. ``--clock`` publishes ``/clock`` with the bag time for nodes
 running with ``use_sim_time:=true`` (the equivalent of ``ros2 bag play --clock``);
 ``--restamp`` shifts header stamps to this machine's time instead, for nodes on wall time.
 ``--loop`` starts again at the end: time jumps backwards, which the detector answers with a
-reset. DDS stays on this machine only if ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` is set (the
-README's commands set it).
+reset. ``--wait-for-subscribers S`` creates every publisher first and waits up to S seconds
+until each topic has a subscriber, so the start of the bag is not lost to DDS discovery (which
+can take seconds). DDS stays on this machine only if ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
+is set (the README's commands set it).
 """
 
 import argparse
@@ -29,6 +32,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--restamp', action='store_true',
                         help='shift header stamps to the current time (rate 1 only)')
     parser.add_argument('--topics', nargs='+', default=None, help='only these topics')
+    parser.add_argument('--wait-for-subscribers', type=float, default=0.0, metavar='S',
+                        help='before playing, wait up to S seconds until every topic has a '
+                             'subscriber (default 0: start at once)')
     args = parser.parse_args(argv)
 
     import rclpy
@@ -50,6 +56,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         player = BagPlayer(node=node, rate=args.rate, clock=args.clock, restamp=args.restamp,
                            log=node.get_logger().warning)
         duration = (records[-1].log_ns - records[0].log_ns) * 1e-9
+        if args.wait_for_subscribers > 0:
+            lonely = player.wait_for_subscribers(records, timeout_s=args.wait_for_subscribers)
+            if lonely:
+                print(f'no subscriber after {args.wait_for_subscribers:g} s on '
+                      f'{", ".join(lonely)}; playing anyway', flush=True)
         while True:
             print(f'playing {args.bag.name}: {len(records)} messages, {duration:.1f} s '
                   f'at {args.rate:g}x', flush=True)

@@ -18,7 +18,7 @@ from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import (manifest_entry, STORAGES, write_manifest,
                                              write_trial_bag)
 from contact_detector.sim.conditions import ALIASES, CONDITION_SETS, resolve_conditions
-from contact_detector.sim.trial import simulate_trial
+from contact_detector.sim.trial import simulate_trial, simulate_trials
 
 PROG = 'contact-detector simulate'
 
@@ -95,14 +95,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         _prepare(args.out_dir, overwrite=args.overwrite)
         records = []
-        kinds = ('hand', 'table', 'none')
-        indices = range(args.start_index, args.start_index + args.trials)
-        for i in tqdm(indices, desc='simulate', unit='trial', disable=args.quiet):
-            trial = simulate_trial(seed=args.seed, index=i,
-                                   condition=conditions[i % len(conditions)],
-                                   audio_rate=args.audio_rate, ft_rate=args.ft_rate,
-                                   chunk_size=args.chunk_size, label_window_s=args.label_window,
-                                   hits=kinds[(i // len(conditions)) % 3])
+        trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
+                                 start_index=args.start_index, audio_rate=args.audio_rate,
+                                 ft_rate=args.ft_rate, chunk_size=args.chunk_size,
+                                 label_window_s=args.label_window)
+        for trial in tqdm(trials, total=args.trials, desc='simulate', unit='trial',
+                          disable=args.quiet):
             write_trial_bag(trial=trial, path=args.out_dir / trial.name, storage=args.storage)
             records.append(manifest_entry(trial))
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,

@@ -10,6 +10,7 @@ the one left out (heavy, soft, noisy, gain), for the settings that are meant to 
 """
 
 import argparse
+from dataclasses import replace
 import json
 from pathlib import Path
 import sys
@@ -18,7 +19,7 @@ from typing import List, Optional, Sequence
 from tqdm import tqdm
 
 from contact_detector.cli.evaluate import truth_for
-from contact_detector.cli.train import conditions_of
+from contact_detector.cli.train import conditions_of, DEFAULT_RULE
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
@@ -27,44 +28,40 @@ from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetti
                                           fit_forest, rows_markdown, score_rules)
 from contact_detector.model.training import LabelWindow
 
-EXTRAS = ('audio_power_rel_db', 'force_delta', 'torque_delta')
+EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 ONSET = LabelWindow(0.0, 0.1)
 STATE = LabelWindow(0.0, 0.3)
 
 
 def feature_grid(name: str) -> List[FeatureSetting]:
-    """Return the feature settings to try."""
+    """Return the feature settings to try: 'compare', 'focus' or 'full' (both)."""
     paper = FeatureConfig(ft_window=160, ft_hop=128)
     base = FeatureConfig(ft_window=32, ft_hop=1)
-    grid = [
+    ours = FeatureConfig(ft_detrend='mean', extra_features=EXTRAS)
+    compare = [
         FeatureSetting('paper W160 H128, onset labels', paper, ONSET),
         FeatureSetting('W32 H1, onset labels', base, ONSET),
         FeatureSetting('W32 H1, state labels', base, STATE),
         FeatureSetting('W32 H1 detrend, state labels', FeatureConfig(ft_detrend='mean'), STATE),
-        FeatureSetting('W32 H1 detrend+extras, onset labels',
-                       FeatureConfig(ft_detrend='mean', extra_features=EXTRAS), ONSET),
-        FeatureSetting('W32 H1 detrend+extras, state labels',
-                       FeatureConfig(ft_detrend='mean', extra_features=EXTRAS), STATE),
+        FeatureSetting('W32 H1 detrend+extras, onset labels', ours, ONSET),
+        FeatureSetting('W32 H1 detrend+extras, state labels', ours, STATE),
     ]
-    if name == 'full':
-        grid += [
-            FeatureSetting('W16 H1 detrend+extras, state labels',
-                           FeatureConfig(ft_window=16, ft_detrend='mean',
-                                         extra_features=EXTRAS), STATE),
-            FeatureSetting('W64 H1 detrend+extras, state labels',
-                           FeatureConfig(ft_window=64, ft_detrend='mean',
-                                         extra_features=EXTRAS), STATE),
-            FeatureSetting('W32 H4 detrend+extras, state labels',
-                           FeatureConfig(ft_hop=4, ft_detrend='mean', extra_features=EXTRAS),
-                           STATE),
-            FeatureSetting('audio 16 ms / 5 ms, W32 H1 detrend+extras, state labels',
-                           FeatureConfig(audio_frame_s=0.016, audio_hop_s=0.005,
-                                         ft_detrend='mean', extra_features=EXTRAS), STATE),
-            FeatureSetting('W32 H1 detrend+extras, labels 0-0.5 s',
-                           FeatureConfig(ft_detrend='mean', extra_features=EXTRAS),
-                           LabelWindow(0.0, 0.5)),
-        ]
-    return grid
+    focus = [
+        FeatureSetting('detrend+extras, state labels, delta lag 5',
+                       replace(ours, delta_lag=5), STATE),
+        FeatureSetting('detrend+extras, state labels, delta lag 3',
+                       replace(ours, delta_lag=3, delta_window=2), STATE),
+        FeatureSetting('detrend+extras, labels 0-0.2 s', ours, LabelWindow(0.0, 0.2)),
+        FeatureSetting('detrend+extras, labels 0-0.5 s', ours, LabelWindow(0.0, 0.5)),
+        FeatureSetting('W16 H1 detrend+extras, state labels', replace(ours, ft_window=16),
+                       STATE),
+        FeatureSetting('W64 H1 detrend+extras, state labels', replace(ours, ft_window=64),
+                       STATE),
+        FeatureSetting('W32 H4 detrend+extras, state labels', replace(ours, ft_hop=4), STATE),
+        FeatureSetting('audio 16 ms / 5 ms, detrend+extras, state labels',
+                       replace(ours, audio_frame_s=0.016, audio_hop_s=0.005), STATE),
+    ]
+    return {'compare': compare, 'focus': focus, 'full': compare + focus, 'none': []}[name]
 
 
 def rule_grid() -> List[DecisionRule]:
@@ -109,7 +106,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('train', help='training bags (folder)')
     parser.add_argument('heldout', help='held-out bags (folder)')
-    parser.add_argument('--grid', choices=('quick', 'full'), default='quick')
+    parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
+                        default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--seed', type=int, default=0)
@@ -140,8 +138,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              setting=setting, rules=rules)
         rows += scored
         best_rows.append(best_row(scored))
-    text = ['## Best rule per setting (held-out trials)', '', rows_markdown(best_rows), '',
-            '## Every rule', '', rows_markdown(rows), '']
+    text = []
+    if rows:
+        text += ['## Best rule per setting (held-out trials)', '', rows_markdown(best_rows), '',
+                 '## Every rule', '', rows_markdown(rows), '']
     if args.ablation:
         text += ['## Ablation: train on the other condition sets, test on the one left out',
                  '', ablation(train, heldout, args), '']
@@ -155,9 +155,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def ablation(train, heldout, args) -> str:
-    """Leave-one-condition-out table for the ablation settings (rule p>=0.5 x2)."""
+    """Leave-one-condition-out table for the ablation settings (the default rule)."""
     everything = {**train, **heldout}
-    rule = [DecisionRule(threshold=0.5, confirm_frames=2, refractory_s=1.0)]
+    rule = [DEFAULT_RULE]
     lines = ['| setting | held-out condition | detected | premature | impact events | '
              'latency median [ms] |', '|---|---|---|---|---|---|']
     cache = {}

@@ -12,16 +12,13 @@ import argparse
 from datetime import datetime, timezone
 import json
 from pathlib import Path
-import platform
 import sys
 from typing import Optional, Sequence
 
 from joblib import delayed, Parallel
 import numpy as np
-import sklearn
 from tqdm import tqdm
 
-import contact_detector
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ContactDetectorError
@@ -29,14 +26,20 @@ from contact_detector.evaluation.metrics import score_trial, summarize, Truth
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
-from contact_detector.model.bundle import DecisionRule, ModelBundle, save_bundle
+from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
+                                           save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
                                              trial_features)
 
-#: The defaults chosen by the sweep (docs/sweep.md); the paper's values are in docs/features.md.
-DEFAULT_FEATURES = FeatureConfig()
-DEFAULT_LABELS = LabelWindow()
-DEFAULT_RULE = DecisionRule()
+#: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
+#: sample with its mean removed, the four extra features, labels covering the first 0.3 s of
+#: the contact, release after two consecutive frames with P(contact) >= 0.7. The paper's settings
+#: (W160/H128, 7 features, 0.1 s labels) are one row of that table.
+DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
+                                 extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
+                                                 'force_delta', 'torque_delta'))
+DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
+DEFAULT_RULE = DecisionRule(threshold=0.7, confirm_frames=2, refractory_s=1.0)
 
 
 def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
@@ -232,9 +235,7 @@ def _train(args: argparse.Namespace) -> int:
         forest=quoted.forest, feature_config=config, feature_names=config.feature_names,
         feature_schema_version=FEATURE_SCHEMA_VERSION, label_window=labels.to_dict(),
         decision_rule=rule,
-        versions={'contact_detector': contact_detector.__version__,
-                  'scikit-learn': sklearn.__version__, 'numpy': np.__version__,
-                  'python': platform.python_version()},
+        versions=runtime_versions(),
         training=training, metrics=metrics,
         created=datetime.now(timezone.utc).isoformat(timespec='seconds'))
     if not args.no_events:

@@ -16,9 +16,16 @@ import numpy as np
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
-                                                 TimeJumpError)
+                                                 TimeJumpError, to_unit_audio)
 from contact_detector.model.bundle import DecisionRule, ModelBundle
 from contact_detector.model.compiled_forest import CompiledForest
+
+#: A dropped message's stamp is trusted at most this far ahead of the newest accepted input, s
+#: (a corrupt message may carry any stamp; its hold-off must not block releases for ever).
+MAX_DROP_AHEAD_S = 1.0
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: A chunk with a sample at or beyond this (full scale = 1) counts as clipped.
+CLIP_LEVEL = 32767.0 / 32768.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +53,10 @@ class DetectorSettings:
         Whether a release may fire before the first ``arm`` call.
     rule : DecisionRule or None
         Overrides the model bundle's decision rule.
+    audio_rate_tolerance : float or None
+        Largest accepted relative difference between the rate at which audio samples arrive
+        (per second of stamps) and ``audio_rate``; beyond it every chunk is dropped (see
+        :class:`AudioRateCheck`). None turns the check off.
 
     """
 
@@ -58,9 +69,14 @@ class DetectorSettings:
     corrupt_holdoff_s: float = 0.2
     armed_on_start: bool = True
     rule: Optional[DecisionRule] = None
+    audio_rate_tolerance: Optional[float] = 0.2
 
     def __post_init__(self) -> None:
         """Validate ranges; raise ConfigError naming the field."""
+        tol = self.audio_rate_tolerance
+        if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol)
+                                    and 0 < tol < 1):
+            raise ConfigError(f'audio_rate_tolerance must be None or in (0, 1), got {tol!r}')
         for name in ('max_ft_wait_s', 'max_input_delay_s', 'warmup_s', 'corrupt_holdoff_s'):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
@@ -112,6 +128,68 @@ class Decisions:
         return cls(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool), error=error)
 
 
+class AudioRateCheck:
+    """
+    Notice audio whose sample count does not follow its stamps: a wrong rate or channel count.
+
+    Stereo audio read as mono, or 32 kHz audio configured as 16 kHz, is otherwise accepted
+    silently (frame times just follow the stamps) and gives features on a wrong time scale.
+    Each chunk of ``n`` samples stamped ``s`` gives the offset ``o = s - S / rate``, ``S`` the
+    samples counted since the check (re)started. Transport delay only adds to ``o``, so the
+    minimum of ``o`` over blocks of ``block_s`` of stamps follows the stream's true start; with
+    ``r_true`` samples per second it drifts by ``1 - r_true / rate`` seconds per second. Once the
+    block minima span ``min_span_s``, ``ratio = 1 - drift`` (between the oldest kept block and
+    the newest, at most ``window_s`` apart) estimates ``r_true / rate``. A stamp going backwards,
+    or a chunk more than ``gap_s`` later than its samples allow (a dropout, a stall), restarts the
+    check, so jitter, bursts and dropouts are not mistaken for a wrong rate.
+
+    Parameters
+    ----------
+    rate : float
+        Configured audio rate, Hz.
+    tolerance : float
+        A mismatch is ``|ratio - 1| > tolerance``.
+
+    """
+
+    def __init__(self, *, rate: float, tolerance: float, block_s: float = 0.5,
+                 window_s: float = 2.0, min_span_s: float = 1.0, gap_s: float = 0.2) -> None:
+        self.rate = float(rate)
+        self.tolerance = tolerance
+        self.block_s, self.window_s = block_s, window_s
+        self.min_span_s, self.gap_s = min_span_s, gap_s
+        self.reset()
+
+    def reset(self) -> None:
+        """Start measuring afresh."""
+        self._last: Optional[float] = None
+        self._samples = 0
+        self._blocks: list = []         # [first stamp, min offset, stamp of the min]
+        self.ratio: Optional[float] = None
+
+    def update(self, *, n: int, stamp: float) -> Optional[float]:
+        """Add a chunk of ``n`` samples ending at ``stamp`` (s); return the ratio if off."""
+        if self._last is not None and (stamp < self._last
+                                       or stamp - self._last - n / self.rate > self.gap_s):
+            self.reset()
+        self._samples += n
+        offset = stamp - self._samples / self.rate
+        blocks = self._blocks
+        if not blocks or stamp - blocks[-1][0] >= self.block_s:
+            blocks.append([stamp, offset, stamp])
+            while len(blocks) > 2 and blocks[-1][0] - blocks[1][0] >= self.window_s:
+                del blocks[0]
+        elif offset < blocks[-1][1]:
+            blocks[-1][1], blocks[-1][2] = offset, stamp
+        self._last = stamp
+        span = blocks[-1][2] - blocks[0][2]
+        if span < self.min_span_s:
+            self.ratio = None
+            return None
+        self.ratio = 1.0 - (blocks[-1][1] - blocks[0][1]) / span
+        return self.ratio if abs(self.ratio - 1.0) > self.tolerance else None
+
+
 class ContactDetector:
     """
     Contact decisions and releases from audio chunks and wrench samples.
@@ -127,7 +205,8 @@ class ContactDetector:
 
     COUNTERS = ('audio_msgs', 'wrench_msgs', 'audio_dropped', 'wrench_dropped', 'time_jumps',
                 'frames', 'invalid_frames', 'stale_frames', 'events', 'releases',
-                'audio_restarts', 'wrench_restarts')
+                'audio_restarts', 'wrench_restarts', 'audio_rate_mismatch', 'nonfinite_frames',
+                'audio_clipped')
 
     def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
         self.bundle = bundle
@@ -142,6 +221,8 @@ class ContactDetector:
         except InputError as err:
             raise ConfigError(f'cannot build the detector: {err}') from err
         self.logic = ReleaseLogic(rule=self.rule, armed=settings.armed_on_start)
+        self.rate_check = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
+            rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
         self.counts = {name: 0 for name in self.COUNTERS}
         self.last_error: Optional[str] = None
         self.reset()
@@ -152,6 +233,8 @@ class ContactDetector:
         """Forget all stream state (buffers, anchors, confirmation run); keep arming."""
         self.extractor.reset()
         self.logic.reset()
+        if self.rate_check is not None:
+            self.rate_check.reset()
         self._warm_until: Optional[float] = None
         self._holdoff_until = -math.inf
         self.latest_audio_t: Optional[float] = None
@@ -179,15 +262,22 @@ class ContactDetector:
         Process a mono audio chunk whose last sample is at ``stamp``.
 
         Corrupt chunks are dropped and counted (the audio stream restarts, so a lost chunk never
-        glues two pieces of sound together); a backwards time jump resets everything first.
+        glues two pieces of sound together), and so is every chunk while the samples arrive at
+        a rate that does not match ``audio_rate`` (:class:`AudioRateCheck`); a backwards time
+        jump resets everything first.
         """
         self.counts['audio_msgs'] += 1
         try:
-            frames = self._with_jump_reset(lambda: self.extractor.push_audio(samples,
-                                                                             stamp=stamp))
+            unit = to_unit_audio(samples)
+            self._check_rate(unit.shape[0], stamp)
+            frames = self._with_jump_reset(lambda: self.extractor.push_audio(unit, stamp=stamp))
         except InputError as err:
             return self.drop(kind='audio', reason=str(err), stamp=stamp)
-        self.latest_audio_t = stamp
+        if unit.size and float(np.max(np.abs(unit))) >= CLIP_LEVEL:
+            # Real sound, decided as usual; counted so that diagnostics can say "gain too high".
+            self.counts['audio_clipped'] += 1
+        if self.extractor.audio.latest_time is not None:
+            self.latest_audio_t = self.extractor.audio.latest_time
         return self._decide(frames, now)
 
     def on_wrench(self, *, t: np.ndarray, force: np.ndarray, torque: np.ndarray,
@@ -204,7 +294,7 @@ class ContactDetector:
             except (TypeError, ValueError):
                 pass
             return self.drop(kind='wrench', reason=str(err), stamp=stamp)
-        self.latest_wrench_t = float(np.max(t))
+        self.latest_wrench_t = self.extractor.ft.last_input_t
         return self._decide(frames, now)
 
     def flush(self) -> Decisions:
@@ -212,6 +302,20 @@ class ContactDetector:
         return self._decide(self.extractor.flush(), None)
 
     # --- internals ---------------------------------------------------------------------------
+
+    def _check_rate(self, n: int, stamp: Optional[float]) -> None:
+        """Raise InputError while the audio rate does not match (see AudioRateCheck)."""
+        if self.rate_check is None or n == 0 or not isinstance(stamp, (int, float)) \
+                or not math.isfinite(stamp):
+            return                      # an empty chunk or a bad stamp: push_audio decides
+        ratio = self.rate_check.update(n=n, stamp=float(stamp))
+        if ratio is not None:
+            self.counts['audio_rate_mismatch'] += 1
+            rate = self.settings.audio_rate
+            raise InputError(
+                f'audio arrives at {ratio * rate:.0f} samples per second of stamps, but the '
+                f'configured rate is {rate:.0f} Hz (x{ratio:.2f}): wrong sample rate or channel '
+                'count configured (stereo read as mono?), or heavy message loss')
 
     def _with_jump_reset(self, push):
         try:
@@ -236,12 +340,16 @@ class ContactDetector:
             self.extractor.audio.reset()
         message = f'{kind} message dropped: {reason}'
         self.last_error = message
-        if stamp is not None and math.isfinite(stamp):
+        # The hold-off runs from the newest accepted input time, or from the message's own stamp
+        # if later but not more than MAX_DROP_AHEAD_S later (its stamp may be garbage too).
+        # Before any input was accepted the warm-up blocks releases anyway.
+        latest = [v for v in (self.latest_audio_t, self.latest_wrench_t) if v is not None]
+        if latest:
+            start = max(latest)
+            if isinstance(stamp, (int, float)) and math.isfinite(stamp):
+                start = max(start, min(float(stamp), start + MAX_DROP_AHEAD_S))
             self._holdoff_until = max(self._holdoff_until,
-                                      stamp + self.settings.corrupt_holdoff_s)
-        elif self.latest_audio_t is not None:
-            self._holdoff_until = max(self._holdoff_until, self.latest_audio_t
-                                      + self.settings.corrupt_holdoff_s)
+                                      start + self.settings.corrupt_holdoff_s)
         return Decisions.empty(error=message)
 
     def _decide(self, frames: FeatureFrames, now: Optional[float]) -> Decisions:
@@ -251,6 +359,11 @@ class ContactDetector:
         if n == 0:
             return Decisions.empty()
         valid = frames.valid.copy()
+        # Finite input can still overflow (e.g. float audio of 1e200): such rows are invalid.
+        finite = np.all(np.abs(frames.x) <= _FLOAT32_MAX, axis=1)
+        if not finite.all():
+            self.counts['nonfinite_frames'] += int((valid & ~finite).sum())
+            valid &= finite
         if now is not None:
             stale = (now - frames.t) > self.settings.max_input_delay_s
             self.counts['stale_frames'] += int(stale.sum())

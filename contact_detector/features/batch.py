@@ -179,13 +179,16 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
     x = np.zeros((t_a.size, len(names)))
     valid = np.zeros(t_a.size, dtype=bool)
     rel = None
-    if 'audio_power_rel_db' in names:
+    if 'audio_power_rel_db' in names or 'audio_peak_rel_db' in names:
         rel = spectral.power_db_above_floor(power=power,
                                             floor=batch_noise_floor(config=config, power=power))
     for i, t in enumerate(t_a):
         x[i, 0] = power[i]
-        if rel is not None:
+        if 'audio_power_rel_db' in names:
             x[i, names.index('audio_power_rel_db')] = rel[i]
+        if 'audio_peak_rel_db' in names:
+            x[i, names.index('audio_peak_rel_db')] = rel[max(0, i - config.peak_frames + 1):
+                                                         i + 1].max()
         before = np.flatnonzero(ft_times <= t)
         if before.size and t - ft_times[before[-1]] <= age:
             valid[i] = True

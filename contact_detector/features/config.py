@@ -28,9 +28,12 @@ PAPER_FEATURES = (
 #: Extra features beyond the paper, enabled by :attr:`FeatureConfig.extra_features`.
 #: ``*_delta`` is the change of the F/T magnitude (mean of the newest ``delta_window`` samples
 #: minus the mean of the ``delta_window`` samples ending ``delta_lag`` F/T samples earlier),
-#: in N or N m; ``audio_power_rel_db`` is the audio power in dB above the tracked noise floor.
+#: in N or N m; ``audio_power_rel_db`` is the audio power in dB above the tracked noise floor;
+#: ``audio_peak_rel_db`` its maximum over the newest ``peak_frames`` audio frames (a recent
+#: impact sound, while the F/T evidence of load transfer builds up).
 EXTRA_FEATURES = (
     'audio_power_rel_db',
+    'audio_peak_rel_db',
     'force_delta',
     'torque_delta',
 )
@@ -70,6 +73,8 @@ class FeatureConfig:
         Distance in F/T samples between the two averages of a ``*_delta`` feature.
     noise_floor_tau_s : float
         Time constant in seconds with which the audio noise floor rises (it falls at once).
+    peak_frames : int
+        Audio frames over which ``audio_peak_rel_db`` takes its maximum.
 
     """
 
@@ -84,6 +89,7 @@ class FeatureConfig:
     delta_window: int = 3
     delta_lag: int = 10
     noise_floor_tau_s: float = 2.0
+    peak_frames: int = 10
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -95,7 +101,7 @@ class FeatureConfig:
                 raise ConfigError(f'FeatureConfig.{name} must be a finite number > 0, '
                                   f'got {value!r}')
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
-                          ('delta_lag', 1)):
+                          ('delta_lag', 1), ('peak_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')

@@ -98,7 +98,10 @@ def to_unit_audio(samples: np.ndarray) -> np.ndarray:
         Wrong dimensionality or dtype, or a NaN/Inf sample.
 
     """
-    arr = np.asarray(samples)
+    try:
+        arr = np.asarray(samples)
+    except (TypeError, ValueError) as err:     # ragged nested sequences
+        raise InputError(f'audio chunk is not an array: {err}') from err
     if arr.ndim != 1:
         raise InputError(f'audio chunk must be 1-D (mono), got shape {arr.shape}')
     if arr.dtype == np.int16:
@@ -228,7 +231,13 @@ class AudioFramer:
             if self._anchor is None:
                 raise InputError('the first audio chunk after a reset needs a stamp')
         else:
-            self._update_anchor(n, float(stamp))
+            try:
+                stamp = float(stamp)
+            except (TypeError, ValueError) as err:
+                raise InputError(f'audio stamp {stamp!r} is not a number') from err
+            if not math.isfinite(stamp):
+                raise InputError(f'audio stamp {stamp!r} is not finite')
+            self._update_anchor(n, stamp)
         self._buf = np.concatenate([self._buf, samples]) if self._buf.size else samples
         self._n_total += n
         w = self.frame_length
@@ -536,6 +545,8 @@ class StreamingFeatureExtractor:
         self._ft_col = np.array([self.ft.columns.index(self.names[i]) for i in self._ft_dst])
         self._rel_idx = (self.names.index('audio_power_rel_db')
                          if 'audio_power_rel_db' in self.names else None)
+        self._peak_idx = (self.names.index('audio_peak_rel_db')
+                          if 'audio_peak_rel_db' in self.names else None)
         self.reset()
 
     def reset(self) -> None:
@@ -546,8 +557,9 @@ class StreamingFeatureExtractor:
         self._ft_t = np.zeros(0)
         self._ft_x = np.zeros((0, len(self.ft.columns)))
         self._pend_t = np.zeros(0)
-        self._pend_a = np.zeros((0, 2))     # power, dB above floor
+        self._pend_a = np.zeros((0, 3))     # power, dB above floor, recent peak of that
         self._pend_arrival = np.zeros(0)
+        self._rel_hist = np.full(self.config.peak_frames - 1, -np.inf)
 
     @property
     def pending(self) -> int:
@@ -568,7 +580,7 @@ class StreamingFeatureExtractor:
         Raises
         ------
         InputError
-            Malformed chunk (nothing is changed).
+            Malformed chunk, or a stamp that is not a finite number (nothing is changed).
         TimeJumpError
             The stamp jumped backwards (nothing is changed; reset and push again).
 
@@ -576,14 +588,23 @@ class StreamingFeatureExtractor:
         unit = to_unit_audio(samples)
         t, power = self.audio.push(unit, stamp=stamp)
         if t.size:
+            needs_rel = self._rel_idx is not None or self._peak_idx is not None
             rel = (spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
-                   if self._rel_idx is not None else np.zeros_like(power))
+                   if needs_rel else np.zeros_like(power))
+            peak = self._recent_peak(rel) if self._peak_idx is not None else rel
             arrival = self.audio.latest_time
             self._pend_t = np.concatenate([self._pend_t, t])
-            self._pend_a = np.concatenate([self._pend_a, np.stack([power, rel], axis=1)])
+            self._pend_a = np.concatenate([self._pend_a, np.stack([power, rel, peak], axis=1)])
             self._pend_arrival = np.concatenate([self._pend_arrival,
                                                  np.full(t.size, arrival)])
         return self._drain(force=False)
+
+    def _recent_peak(self, rel: np.ndarray) -> np.ndarray:
+        # Running maximum over the newest peak_frames values, across chunk boundaries.
+        k = self.config.peak_frames
+        history = np.concatenate([self._rel_hist, rel])
+        self._rel_hist = history[history.size - (k - 1):] if k > 1 else history[:0]
+        return history[np.arange(rel.size)[:, None] + np.arange(k)].max(axis=1)
 
     def push_wrench(self, *, t: np.ndarray, force: np.ndarray,
                     torque: np.ndarray) -> FeatureFrames:
@@ -605,9 +626,12 @@ class StreamingFeatureExtractor:
             Stamps jumped backwards (nothing is changed; reset and push again).
 
         """
-        t = np.atleast_1d(np.asarray(t, dtype=np.float64))
-        force = np.atleast_2d(np.asarray(force, dtype=np.float64))
-        torque = np.atleast_2d(np.asarray(torque, dtype=np.float64))
+        try:
+            t = np.atleast_1d(np.asarray(t, dtype=np.float64))
+            force = np.atleast_2d(np.asarray(force, dtype=np.float64))
+            torque = np.atleast_2d(np.asarray(torque, dtype=np.float64))
+        except (TypeError, ValueError, OverflowError) as err:
+            raise InputError(f'wrench arrays are not numeric: {err}') from err
         if t.ndim != 1 or force.shape != (t.size, 3) or torque.shape != (t.size, 3):
             raise InputError(f'wrench arrays have shapes t{t.shape}, force{force.shape}, '
                              f'torque{torque.shape}; expected (n,), (n, 3), (n, 3)')
@@ -652,6 +676,8 @@ class StreamingFeatureExtractor:
         x[:, 0] = audio[:, 0]
         if self._rel_idx is not None:
             x[:, self._rel_idx] = audio[:, 1]
+        if self._peak_idx is not None:
+            x[:, self._peak_idx] = audio[:, 2]
         idx = np.searchsorted(self._ft_t, t, side='right') - 1
         valid = idx >= 0
         valid[valid] &= (t[valid] - self._ft_t[idx[valid]]) <= self.max_ft_age_s

@@ -144,7 +144,7 @@ def stamp_to_seconds(stamp: Any) -> float:
     try:
         sec = int(stamp.sec)
         nanosec = int(stamp.nanosec)
-    except (AttributeError, TypeError, ValueError) as err:
+    except (AttributeError, TypeError, ValueError, OverflowError) as err:
         raise InputError(f'invalid time stamp {stamp!r}: {err}') from err
     if not 0 <= nanosec < 1_000_000_000:
         raise InputError(f'invalid time stamp: nanosec={nanosec} is outside [0, 1e9)')
@@ -170,13 +170,13 @@ def wrench_to_arrays(msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         Missing or non-numeric fields. (NaN/Inf and stamp order are checked by the core.)
 
     """
-    t = stamp_to_seconds(_field(msg, 'header').stamp)
+    t = stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
     wrench = _field(msg, 'wrench')
     try:
         f, m = wrench.force, wrench.torque
         force = np.array([[float(f.x), float(f.y), float(f.z)]])
         torque = np.array([[float(m.x), float(m.y), float(m.z)]])
-    except (AttributeError, TypeError, ValueError) as err:
+    except (AttributeError, TypeError, ValueError, OverflowError) as err:
         raise InputError(f'malformed wrench message: {err}') from err
     return np.array([t]), force, torque
 
@@ -190,7 +190,7 @@ def audio_stamp(msg: Any, msg_type: str) -> Optional[float]:
     spec = AUDIO_MSG_TYPES[normalise_msg_type(msg_type)]
     if not spec.stamped:
         return None
-    return stamp_to_seconds(_field(msg, 'header').stamp)
+    return stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
 
 
 def check_stamp(*, stamp: float, now: float, max_future_s: float,
@@ -374,28 +374,43 @@ def _field(msg: Any, name: str) -> Any:
 
 
 def _int_field(msg: Any, name: str) -> int:
-    value = _field(msg, name)
+    return _as_int(_field(msg, name), name)
+
+
+def _as_int(value: Any, name: str) -> int:
     if isinstance(value, float) and not value.is_integer():
         raise InputError(f'{name}={value!r} is not an integer')
     try:
         return int(value)
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:
         raise InputError(f'{name}={value!r} is not an integer') from err
+
+
+def _length(value: Any) -> int:
+    """Return the number of elements of an array field (0 for None, scalars and junk)."""
+    if value is None:
+        return 0
+    try:
+        return int(np.size(value)) if not isinstance(value, (bytes, bytearray)) else len(value)
+    except (TypeError, ValueError):
+        return 0
 
 
 def _multiarray_data(msg: Any) -> Any:
     data = _field(msg, 'data')
-    layout = getattr(msg, 'layout', None)
-    offset = int(getattr(layout, 'data_offset', 0) or 0) if layout is not None else 0
+    offset = getattr(getattr(msg, 'layout', None), 'data_offset', 0)
+    offset = 0 if offset is None else _as_int(offset, 'layout.data_offset')
+    if offset < 0:
+        raise InputError(f'layout.data_offset={offset} is negative')
     if offset:
-        data = np.asarray(data)[offset:]
+        data = _raw_array(data, 'data')[offset:]
     return data
 
 
 def _raw_array(data: Any, what: str) -> np.ndarray:
-    if isinstance(data, (bytes, bytearray, memoryview)):
-        return np.frombuffer(data, dtype=np.uint8)
     try:
+        if isinstance(data, (bytes, bytearray, memoryview)):
+            return np.frombuffer(data, dtype=np.uint8)
         arr = np.asarray(data)
     except (TypeError, ValueError) as err:
         raise InputError(f'{what} is not an array: {err}') from err
@@ -424,7 +439,8 @@ def _float_array(data: Any, what: str) -> np.ndarray:
     arr = _raw_array(data, what)
     if arr.size and arr.dtype.kind not in 'fiu':
         raise InputError(f'{what} must hold numbers, got {arr.dtype.name} values')
-    out = arr.astype(np.float32, copy=False)
+    with np.errstate(over='ignore'):       # too large for float32 -> Inf, refused below
+        out = arr.astype(np.float32, copy=False)
     if out.size and not np.all(np.isfinite(out)):
         raise InputError(f'{what} contains NaN or Inf')
     return out
@@ -441,7 +457,7 @@ def _audio_data(audio: Any, code: Optional[int], what: str) -> tuple[np.ndarray,
         return raw.view('<i2').astype(np.int16, copy=False), 32768.0, 0.0
     if code is None:
         # mgonzs13 AudioData without info: take the one non-empty typed array.
-        filled = [f for f in _TYPED_FIELDS if len(getattr(audio, f, None) or ()) > 0]
+        filled = [f for f in _TYPED_FIELDS if _length(getattr(audio, f, None)) > 0]
         if len(filled) != 1:
             raise InputError(f'{what}: expected exactly one non-empty typed array, got '
                              f'{filled or "none"}')

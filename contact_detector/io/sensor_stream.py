@@ -13,7 +13,7 @@ from typing import Iterator, List, Optional, Union
 
 import numpy as np
 
-from contact_detector.errors import InputError
+from contact_detector.errors import BagError, InputError
 from contact_detector.io.bags import iter_messages
 from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
 
@@ -30,7 +30,8 @@ class StreamSpec:
     wrench_topic, audio_topic, truth_topic : str
         Topic names in the bag.
     audio_msg_type : str or None
-        Audio message type; None = take it from the bag.
+        Audio message type, ``pkg/msg/Type``; None = take it from the bag. When set, a bag
+        whose audio topic holds another type is refused (BagError).
     channels : int
         Interleaved channels in each audio message.
     channel : int or None
@@ -100,10 +101,20 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
     ------
     AudioEvent, WrenchEvent, TruthEvent or BadEvent
 
+    Raises
+    ------
+    BagError
+        The bag cannot be read, or ``spec.audio_msg_type`` is set (full ``pkg/msg/Type``
+        form) and the audio topic holds another type.
+
     """
     topics = [spec.wrench_topic, spec.audio_topic, spec.truth_topic]
     for message in iter_messages(Path(path), topics=topics):
         now = message.log_time_ns * 1e-9
+        if message.topic == spec.audio_topic and spec.audio_msg_type \
+                and message.msgtype != spec.audio_msg_type:
+            raise BagError(f'{path}: {spec.audio_topic} holds {message.msgtype}, but the audio '
+                           f'type is set to {spec.audio_msg_type} (audio.msg_type)')
         try:
             if message.topic == spec.wrench_topic:
                 t, force, torque = wrench_to_arrays(message.msg)

@@ -1,6 +1,6 @@
 """A random forest flattened for fast, bit-exact inference without scikit-learn's overhead.
 
-scikit-learn's ``RandomForestClassifier.predict_proba`` costs about half a millisecond per call
+scikit-learn's ``RandomForestClassifier.predict_proba`` costs 0.7-1 ms per call
 whatever the batch size (input validation, a thread pool, one array per tree). The live node
 classifies one audio frame at a time, so :class:`CompiledForest` evaluates the same trees
 directly:

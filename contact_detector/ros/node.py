@@ -24,7 +24,9 @@ See ``docs/node.md``.
 
 from collections import deque
 from dataclasses import replace
+import gc
 import importlib
+import re
 import sys
 import time
 from typing import Any, Dict, Optional
@@ -33,9 +35,9 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import rclpy
-from rclpy.clock import JumpThreshold
+from rclpy.clock import ClockChange, JumpThreshold
 from rclpy.duration import Duration
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data,
                        ReliabilityPolicy)
@@ -51,20 +53,26 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsg
                                           check_stamp, embedded_audio_format,
                                           wrench_to_arrays)
 from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
+from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
                                          declare_parameters, NodeConfig, PARAMS_BY_NAME)
 
 #: A backwards jump of the node clock larger than this resets the detector, s.
 CLOCK_JUMP_RESET_S = 0.1
+#: History depth of the output publishers (100 frames = 1 s).
+OUTPUT_DEPTH = 100
 #: Processing latencies kept for :meth:`ContactDetectorNode.latency_samples`.
 LATENCY_HISTORY = 100_000
 
 NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
                  'callback_errors', 'detector_rebuilds', 'contact_msgs', 'release_msgs')
+_NUMBERS = re.compile(r'[-+]?\d+(\.\d+)?(e[-+]?\d+)?')
 #: Counters whose increase during a diagnostics period turns the status to WARN.
 WARN_COUNTERS = ('audio_dropped', 'wrench_dropped', 'time_jumps', 'clock_jumps',
-                 'callback_errors', 'audio_waiting_info', 'bad_stamps')
+                 'callback_errors', 'audio_waiting_info', 'bad_stamps', 'audio_rate_mismatch',
+                 'nonfinite_frames', 'audio_restarts', 'wrench_restarts', 'stale_frames',
+                 'audio_clipped')
 
 
 def import_audio_types(msg_type: str) -> tuple:
@@ -196,15 +204,16 @@ class ContactDetectorNode(Node):
         self.detector = self._build_detector(rate=cfg.audio_sample_rate,
                                              armed=cfg.release_armed_on_start)
         self._time_jumps_seen = 0
-        self._latency = deque(maxlen=LATENCY_HISTORY)
+        self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
+                         'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
         self._window_age: list = []
         self._window_start = time.monotonic()
         self._window_counts: Dict[str, int] = {}
-        self._last_frame_t: Optional[float] = None
 
         self._contact_msg, self._prob_msg = Bool(), Float32()
-        output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+        # One second of frames: a reliable subscriber that stalls briefly loses nothing.
+        output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                                 reliability=ReliabilityPolicy.RELIABLE)
         self.contact_pub = self.create_publisher(Bool, 'contact', output_qos)
         self.probability_pub = self.create_publisher(Float32, 'contact_probability', output_qos)
@@ -289,15 +298,15 @@ class ContactDetectorNode(Node):
         """Rebuild the detector for another audio rate (arming kept, counters carried)."""
         if rate == self.detector.settings.audio_rate:
             return
-        armed = self.detector.armed
-        for name, value in self.detector.counts.items():
-            self._count_base[name] = self._count_base.get(name, 0) + value
+        old = self.detector
         try:
-            self.detector = self._build_detector(rate=rate, armed=armed)
+            self.detector = self._build_detector(rate=rate, armed=old.armed)
         except ConfigError as err:
             self.audio_refused = str(err)
             self.get_logger().error(f'audio refused: {err}')
             return
+        for name, value in old.counts.items():
+            self._count_base[name] = self._count_base.get(name, 0) + value
         self.counts['detector_rebuilds'] += 1
         self._time_jumps_seen = 0
         self.get_logger().info(f'audio rate is now {rate:g} Hz: detector rebuilt, state reset')
@@ -309,9 +318,14 @@ class ContactDetectorNode(Node):
         counts.update(self.counts)
         return counts
 
-    def latency_samples(self) -> np.ndarray:
-        """Return the processing times (s) of recent callbacks that published, oldest first."""
-        return np.array(self._latency)
+    def latency_samples(self, kind: str = 'audio') -> np.ndarray:
+        """
+        Return processing times (s) of recent callbacks that published frames, oldest first.
+
+        From callback entry to the return of the last publish, for the ``kind`` ('audio' or
+        'wrench') callbacks; the last :data:`LATENCY_HISTORY` are kept.
+        """
+        return np.array(self._latency[kind])
 
     # --- input callbacks -------------------------------------------------------------------------
 
@@ -363,11 +377,12 @@ class ContactDetectorNode(Node):
                     raise
         except InputError as err:
             self._handle(self.detector.drop(kind='audio', reason=str(err), stamp=now), now,
-                         entry)
+                         entry, 'audio')
             return
         stream.last_stamp = stamp
         stream.window_samples += samples.shape[0]
-        self._handle(self.detector.on_audio(samples, stamp=stamp, now=now), now, entry)
+        self._handle(self.detector.on_audio(samples, stamp=stamp, now=now), now, entry,
+                     'audio')
 
     def _on_wrench(self, msg: Any) -> None:
         entry = time.perf_counter()
@@ -395,12 +410,12 @@ class ContactDetectorNode(Node):
                     raise
         except InputError as err:
             self._handle(self.detector.drop(kind='wrench', reason=str(err), stamp=None), now,
-                         entry)
+                         entry, 'wrench')
             return
         stream.last_stamp = float(t[-1])
         stream.window_samples += t.shape[0]
         self._handle(self.detector.on_wrench(t=t, force=force, torque=torque, now=now), now,
-                     entry)
+                     entry, 'wrench')
 
     def _on_audio_info(self, msg: Any) -> None:
         try:
@@ -425,11 +440,11 @@ class ContactDetectorNode(Node):
 
     # --- output ----------------------------------------------------------------------------------
 
-    def _handle(self, decisions: Decisions, now: float, entry: float) -> None:
+    def _handle(self, decisions: Decisions, now: float, entry: float, kind: str) -> None:
         """Publish a block of decisions and note what the detector reported."""
         if decisions.error is not None:
-            kind = 'audio' if decisions.error.startswith('audio') else 'wrench'
-            self._warn(f'drop-{kind}', decisions.error)
+            # Throttled per kind of fault: the reason without its numbers.
+            self._warn(f'drop-{kind}-' + _NUMBERS.sub('#', decisions.error), decisions.error)
         jumps = self.detector.counts.get('time_jumps', 0)
         if jumps != self._time_jumps_seen:
             self._time_jumps_seen = jumps
@@ -448,10 +463,9 @@ class ContactDetectorNode(Node):
             self._release(t)
         done = time.perf_counter()
         latency = done - entry
-        self._latency.append(latency)
+        self._latency[kind].append(latency)
         self._window_latency.append(latency)
         self._window_age.append(now + latency - float(decisions.t[-1]))
-        self._last_frame_t = float(decisions.t[-1])
 
     def _release(self, t: float) -> None:
         self.release_pub.publish(Bool(data=True))
@@ -494,9 +508,13 @@ class ContactDetectorNode(Node):
             self.detector.reset()
             self.audio.last_stamp = None
             self.wrench.last_stamp = None
-            self.get_logger().warning(
-                f'node clock jumped by {jump.delta.nanoseconds * 1e-9:+.3f} s (bag loop or '
-                'seek?): detector state reset, warming up again')
+            if jump.clock_change in (ClockChange.ROS_TIME_ACTIVATED,
+                                     ClockChange.ROS_TIME_DEACTIVATED):
+                what = f'time source changed ({jump.clock_change.name})'
+            else:
+                what = (f'node clock jumped by {jump.delta.nanoseconds * 1e-9:+.3f} s (bag loop '
+                        'or seek?)')
+            self.get_logger().warning(f'{what}: detector state reset, warming up again')
         except Exception as err:  # a callback must never raise
             self._callback_failed('clock jump', err)
 
@@ -607,6 +625,10 @@ class ContactDetectorNode(Node):
         else:
             level, message = DiagnosticStatus.OK, (
                 f'running, release {"armed" if det.armed else "disarmed"}')
+        if level != DiagnosticStatus.OK:
+            # Faults without a log line of their own (dropouts, stale input, clipping) show
+            # up here, throttled like the others.
+            self._warn(f'diagnostics-{message.split(":")[0]}', f'diagnostics: {message}')
         self.audio.window_msgs = self.audio.window_samples = 0
         self.wrench.window_msgs = self.wrench.window_samples = 0
         self._window_latency, self._window_age = [], []
@@ -619,6 +641,17 @@ class ContactDetectorNode(Node):
         return array
 
 
+def make_executor(node: ContactDetectorNode) -> Executor:
+    """Return the executor ``executor.type`` asks for, with ``node`` added."""
+    if node.config.executor_type == 'hot_path':
+        executor = HotPathExecutor(hot=list(node.subscriptions),
+                                   poll_s=node.config.executor_poll_s)
+    else:
+        executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    return executor
+
+
 def main(args: Optional[list] = None) -> int:
     """Run the node (``ros2 run contact_detector contact_detector_node``); return the exit code."""
     rclpy.init(args=args)
@@ -626,7 +659,11 @@ def main(args: Optional[list] = None) -> int:
     code = 0
     try:
         node = ContactDetectorNode()
-        rclpy.spin(node)
+        executor = make_executor(node)
+        # The model and the compiled forest live as long as the process: keep them out of
+        # the garbage collector's full passes (shorter pauses in the callbacks).
+        gc.freeze()
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ConfigError, ModelError) as err:

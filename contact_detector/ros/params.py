@@ -13,7 +13,7 @@ import math
 from typing import Any, Dict, Mapping, Optional, Sequence
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-from rclpy.exceptions import ParameterException
+from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 
 from contact_detector.errors import ConfigError
@@ -23,6 +23,7 @@ from contact_detector.model.bundle import DecisionRule
 
 STAMP_SOURCES = ('receive', 'header')
 RELIABILITIES = ('best_effort', 'reliable')
+EXECUTORS = ('hot_path', 'single_threaded')
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,12 @@ PARAMS: Sequence[ParamSpec] = (
               -100.0, 100.0, read_only=False),
     ParamSpec('gripper.duration_s', 0.5, 'time_from_start of the trajectory point, s.',
               0.0, 60.0, read_only=False),
+    ParamSpec('executor.type', 'hot_path', "Executor run by main(): 'hot_path' serves the "
+              'input subscriptions from a small wait set (less CPU per message), '
+              "'single_threaded' is rclpy's stock SingleThreadedExecutor.",
+              choices=EXECUTORS),
+    ParamSpec('executor.poll_s', 0.05, 'hot_path: longest delay of service, parameter and '
+              'timer callbacks, s.', 0.001, 1.0),
     ParamSpec('diagnostics.period_s', 1.0, 'Period of /diagnostics, s.', 0.05, 3600.0,
               read_only=False),
     ParamSpec('log_throttle_s', 2.0, 'Minimum time between two warnings about bad input of '
@@ -176,6 +183,8 @@ class NodeConfig:
     gripper_joint: str
     gripper_position: float
     gripper_duration_s: float
+    executor_type: str
+    executor_poll_s: float
     diagnostics_period_s: float
     log_throttle_s: float
 
@@ -259,7 +268,8 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         release_refractory_s=None if refractory < 0 else refractory,
         gripper_enabled=v['gripper.enabled'], gripper_topic=v['gripper.topic'].strip(),
         gripper_joint=v['gripper.joint'].strip(), gripper_position=v['gripper.position'],
-        gripper_duration_s=v['gripper.duration_s'],
+        gripper_duration_s=v['gripper.duration_s'], executor_type=v['executor.type'],
+        executor_poll_s=v['executor.poll_s'],
         diagnostics_period_s=v['diagnostics.period_s'], log_throttle_s=v['log_throttle_s'])
 
 
@@ -277,10 +287,12 @@ def declare_parameters(node: Node) -> NodeConfig:
     for spec in PARAMS:
         try:
             node.declare_parameter(spec.name, spec.default, spec.descriptor())
-        except ParameterException as err:
+        except InvalidParameterTypeException as err:
             hint = (' (write floating-point values with a decimal point, e.g. 16000.0)'
                     if isinstance(spec.default, float) else '')
             raise ConfigError(f'parameter {spec.name}: {err}{hint}') from err
+        except ParameterException as err:
+            raise ConfigError(f'parameter {spec.name}: {err}') from err
     return config_from_values(current_values(node))
 
 

@@ -117,6 +117,47 @@ class BagPlayer:
                                                                     self._qos)
         return self._publishers[record.topic]
 
+    def wait_for_subscribers(self, records: Sequence[Recorded], *, timeout_s: float,
+                             stop: Optional[threading.Event] = None) -> List[str]:
+        """
+        Create the publishers of ``records`` now and wait until each has a subscriber.
+
+        DDS discovery of a new publisher can take seconds (FastDDS on loopback: up to ~3 s),
+        and a volatile subscription never sees what was published before it matched, so
+        without this wait the start of a short recording is lost. Topics nobody subscribes
+        to hold the start back by ``timeout_s`` at most.
+
+        Parameters
+        ----------
+        records : sequence of Recorded
+            The recording to be played.
+        timeout_s : float
+            Longest wait, seconds of this machine's time.
+        stop : threading.Event or None
+            Ends the wait early when set.
+
+        Returns
+        -------
+        list of str
+            The topics (``/clock`` included) still without a subscriber.
+
+        """
+        publishers = {}
+        for record in records:
+            if record.topic not in publishers:
+                publishers[record.topic] = self._publisher(record)
+        if self._clock_pub is not None:
+            publishers['/clock'] = self._clock_pub
+        waiting = {t: p for t, p in publishers.items() if p is not None}
+        end = time.monotonic() + timeout_s
+        while waiting and time.monotonic() < end:
+            if stop is not None and stop.is_set():
+                break
+            waiting = {t: p for t, p in waiting.items() if p.get_subscription_count() == 0}
+            if waiting:
+                time.sleep(0.01)
+        return sorted(waiting)
+
     def _publish_clock(self, bag_ns: int) -> None:
         msg = self._clock_msg()
         msg.clock.sec, msg.clock.nanosec = divmod(int(bag_ns), 1_000_000_000)

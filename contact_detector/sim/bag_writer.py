@@ -39,6 +39,59 @@ def _ns(trial: Trial, t: np.ndarray) -> np.ndarray:
         np.int64)
 
 
+def wrench_cdr(*, stamp_ns: np.ndarray, force: np.ndarray, torque: np.ndarray,
+               frame_id: str = FRAME_ID) -> np.ndarray:
+    """
+    Serialise WrenchStamped messages to little-endian CDR, all at once.
+
+    Byte-identical to rosbags' ``typestore.serialize_cdr`` (the tests compare them) and about
+    ten times faster, which matters at 1 kHz.
+
+    Parameters
+    ----------
+    stamp_ns : np.ndarray, shape (n,)
+        Header stamps in ns (int64).
+    force, torque : np.ndarray, shape (n, 3)
+        N and N m.
+    frame_id : str
+        ``header.frame_id``.
+
+    Returns
+    -------
+    np.ndarray, shape (n, size), uint8
+        Row i is message i.
+
+    """
+    stamp_ns = np.asarray(stamp_ns, dtype=np.int64)
+    n = len(stamp_ns)
+    fid = frame_id.encode('utf-8') + b'\0'
+    pos = 8 + 4 + len(fid)          # stamp, string length, string (after the 4-byte header)
+    start = 4 + pos + (-pos) % 8    # float64 fields are 8-aligned
+    out = np.zeros((n, start + 48), dtype=np.uint8)
+    out[:, 1] = 1                   # CDR_LE encapsulation
+    sec, nsec = np.divmod(stamp_ns, 1_000_000_000)
+    out[:, 4:8] = sec.astype('<i4').view(np.uint8).reshape(n, 4)
+    out[:, 8:12] = nsec.astype('<u4').view(np.uint8).reshape(n, 4)
+    out[:, 12:16] = np.frombuffer(np.array([len(fid)], '<u4').tobytes(), np.uint8)
+    out[:, 16:16 + len(fid)] = np.frombuffer(fid, np.uint8)
+    values = np.ascontiguousarray(np.hstack([force, torque]), dtype='<f8')
+    out[:, start:] = values.view(np.uint8).reshape(n, 48)
+    return out
+
+
+def int16_multiarray_cdr(data: np.ndarray) -> bytes:
+    """
+    Serialise one mono Int16MultiArray chunk (``layout.dim = [('samples', n, n)]``) to CDR.
+
+    Byte-identical to rosbags' ``typestore.serialize_cdr``.
+    """
+    data = np.asarray(data, dtype='<i2')
+    n = len(data)
+    head = np.array([1, 8], '<u4').tobytes() + b'samples\0' + np.array([n, n, 0, n],
+                                                                       '<u4').tobytes()
+    return b'\x00\x01\x00\x00' + head + data.tobytes()
+
+
 def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Path:
     """
     Write one trial as a rosbag2 directory.
@@ -71,16 +124,7 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
     if path.exists():
         raise BagError(f'{path} already exists')
     ts = jazzy_typestore()
-    types = ts.types
-    Time = types['builtin_interfaces/msg/Time']
-    Header = types['std_msgs/msg/Header']
-    Vector3 = types['geometry_msgs/msg/Vector3']
-    Wrench = types['geometry_msgs/msg/Wrench']
-    WrenchStamped = types[WRENCH_TYPE]
-    Int16MultiArray = types[AUDIO_TYPE]
-    Layout = types['std_msgs/msg/MultiArrayLayout']
-    Dim = types['std_msgs/msg/MultiArrayDimension']
-    Bool = types[TRUTH_TYPE]
+    Bool = ts.types[TRUTH_TYPE]
 
     stamp_ns = _ns(trial, trial.wrench_t)
     wrench_log = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
@@ -95,8 +139,7 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
                           np.arange(2)])
     order = np.lexsort((idx, kinds, times))
     starts = np.concatenate(([0], trial.chunk_ends[:-1]))
-    force = trial.force.tolist()
-    torque = trial.torque.tolist()
+    wrench_raw = wrench_cdr(stamp_ns=stamp_ns, force=trial.force, torque=trial.torque)
     audio = trial.audio
     try:
         writer = Writer(path, version=9, storage_plugin=STORAGES[storage])
@@ -107,22 +150,10 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
             for k in order:
                 kind, i, t = kinds[k], int(idx[k]), int(times[k])
                 if kind == 0:
-                    sec, nsec = divmod(int(stamp_ns[i]), 1_000_000_000)
-                    fx, fy, fz = force[i]
-                    tx, ty, tz = torque[i]
-                    msg = WrenchStamped(
-                        header=Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=FRAME_ID),
-                        wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz),
-                                      torque=Vector3(x=tx, y=ty, z=tz)))
-                    writer.write(c_w, t, ts.serialize_cdr(msg, WRENCH_TYPE))
+                    writer.write(c_w, t, wrench_raw[i].tobytes())
                 elif kind == 1:
-                    data = audio[starts[i]:trial.chunk_ends[i]]
-                    n = len(data)
-                    msg = Int16MultiArray(
-                        layout=Layout(dim=[Dim(label='samples', size=n, stride=n)],
-                                      data_offset=0),
-                        data=data)
-                    writer.write(c_a, t, ts.serialize_cdr(msg, AUDIO_TYPE))
+                    chunk = audio[starts[i]:trial.chunk_ends[i]]
+                    writer.write(c_a, t, int16_multiarray_cdr(chunk))
                 else:
                     writer.write(c_t, t, ts.serialize_cdr(Bool(data=(i == 0)), TRUTH_TYPE))
     except Exception as err:  # rosbags raises its own and OS errors

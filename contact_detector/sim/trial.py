@@ -551,8 +551,11 @@ def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
                 i0, i1 = max(0, int(pos * rate)), min(n, int((pos + length) * rate))
                 on[i0:i1] = 1.0
                 pos += length + float(rng.uniform(0.2, 1.5))
-            syl = float(rng.uniform(3.0, 6.0))
-            am = (0.55 + 0.45 * np.sin(2 * np.pi * syl * t + rng.uniform(0, 2 * np.pi))) ** 2
+            # syllable rate wandering around 3-6 Hz, so talkers do not sound like metronomes
+            syl = float(rng.uniform(3.0, 6.0)) + 1.2 * np.sin(
+                2 * np.pi * float(rng.uniform(0.2, 0.5)) * t + rng.uniform(0, 2 * np.pi))
+            depth = float(rng.uniform(0.3, 0.45))
+            am = (1 - depth + depth * np.sin(2 * np.pi * np.cumsum(syl) / rate)) ** 2
             env += on * am * float(rng.uniform(0.5, 1.0))
         speech = _shaped_noise(rng, n, rate, _band_shape(300.0, 1500.0)) * env
         rms = float(np.sqrt(np.mean(speech ** 2)))

@@ -1,0 +1,276 @@
+"""Latency and CPU share of the live node at 16 kHz / 44.1 kHz audio with 100 Hz F/T and 1 kHz.
+
+Two measurements per input configuration (10 ms audio chunks, one wrench sample per message,
+the simulated trial of test/test_e2e_node.py), medians over the repeats:
+
+1. Replay, in this process: the node's callbacks are called directly with real rclpy messages,
+   ``/clock`` time set to each message's log time (no DDS, no executor). Gives the node's own
+   work: CPU time / trial duration, the node's latency (callback entry to the return of the
+   last ``contact`` publish, wall clock) and the CPU time per callback (unaffected by other
+   processes taking the core).
+2. Live: three processes on loopback DDS as in test/test_e2e_node.py: the trial publisher at
+   the real rate (best-effort sensor-data QoS), the node (``_serve`` below, default
+   parameters) and a listener. Gives the node process's CPU time / wall time while the trial
+   streams (psutil, start-up excluded), the node's callback latency, and end to end: the
+   publisher's ``publish`` of the audio chunk that completes a frame to the listener's receipt
+   of that frame's ``contact`` (DDS both ways, executor wake-ups, any wait for F/T).
+
+    python benchmarks/bench_node.py [--repeats 3] [--model PATH] [--executor single_threaded]
+
+The shipped model is used if it exists (else a small test model is trained first). On a
+machine shared with other work the latency tails measure the scheduler as much as the node:
+compare the CPU time per callback, and read the load average printed in the header.
+"""
+
+import argparse
+import gc
+import json
+import math
+import os
+from pathlib import Path
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+HELPER = REPO / 'test' / 'e2e_helper.py'
+CONFIGS = ((16000, 100.0), (44100, 100.0), (16000, 1000.0))
+
+
+def serve(args: argparse.Namespace) -> None:
+    """Run the node in this process; on SIGINT write its latency samples to ``args.out``."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.parameter import Parameter
+
+    from contact_detector.ros.node import ContactDetectorNode, make_executor
+
+    rclpy.init()
+    node = ContactDetectorNode(parameter_overrides=[
+        Parameter('model.path', value=args.model),
+        Parameter('audio.sample_rate', value=float(args.audio_rate)),
+        Parameter('wrench.rate', value=float(args.ft_rate)),
+        Parameter('executor.type', value=args.executor)])
+    executor = make_executor(node)
+    gc.freeze()
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    Path(args.out).write_text(json.dumps({
+        'audio': node.latency_samples('audio').tolist(),
+        'wrench': node.latency_samples('wrench').tolist(),
+        'counts': node.detector_counts(), 'model_id': node.bundle.model_id}))
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def _spawn(cmd, log: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, *cmd], cwd=REPO, env=dict(os.environ),
+                            stdout=open(log, 'w'), stderr=subprocess.STDOUT)
+
+
+def _frame_chunks(*, audio_rate: int, n_chunks: int, chunk: int) -> np.ndarray:
+    """Index of the audio chunk that completes each frame (the feature core's frame ends)."""
+    from contact_detector.features.config import FeatureConfig
+    from contact_detector.features.streaming import frame_ends
+    config = FeatureConfig()
+    length = config.audio_frame_samples(audio_rate)
+    hop = config.audio_hop_s * audio_rate
+    total = n_chunks * chunk
+    count = int((total - length) / hop) + 2
+    ends = frame_ends(first=0, count=count, frame_length=length, hop=hop)
+    ends = ends[ends <= total]
+    return (ends + chunk - 1) // chunk - 1
+
+
+def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
+             executor: str) -> dict:
+    """One three-process run; return the measurements."""
+    import psutil
+    chunk = audio_rate // 100
+    paths = {name: work / f'{name}.json' for name in ('node', 'pub', 'listen')}
+    stop = work / 'stop'
+    for path in list(paths.values()) + [stop]:
+        if path.exists():
+            path.unlink()
+    node = _spawn([__file__, '_serve', '--executor', executor, '--model', model,
+                   '--audio-rate', str(audio_rate),
+                   '--ft-rate', str(ft_rate), '--out', str(paths['node'])], work / 'node.log')
+    listener = _spawn([str(HELPER), 'listen', '--out', str(paths['listen']), '--stop-file',
+                       str(stop)], work / 'listen.log')
+    publisher = _spawn([str(HELPER), 'publish', '--out', str(paths['pub']), '--audio-rate',
+                        str(audio_rate), '--ft-rate', str(ft_rate), '--chunk', str(chunk)],
+                       work / 'pub.log')
+    proc = psutil.Process(node.pid)
+    samples = []
+    while publisher.poll() is None:
+        times = proc.cpu_times()
+        samples.append((time.time(), times.user + times.system, times.system))
+        time.sleep(0.2)
+    time.sleep(0.5)
+    stop.touch()
+    listener.wait(timeout=30)
+    node.send_signal(signal.SIGINT)
+    node.wait(timeout=30)
+    if publisher.returncode or listener.returncode or node.returncode:
+        raise RuntimeError(f'a process failed; see the logs in {work}')
+    pub = json.loads(paths['pub'].read_text())
+    got = json.loads(paths['listen'].read_text())
+    served = json.loads(paths['node'].read_text())
+    # CPU over the streaming window, start-up excluded.
+    t0, t1 = pub['start_wall'] + 0.5, pub['end_wall'] - 0.4
+    window = [w for w in samples if t0 <= w[0] <= t1]
+    span = window[-1][0] - window[0][0] if len(window) >= 2 else math.nan
+    cpu = (window[-1][1] - window[0][1]) / span
+    sys_cpu = (window[-1][2] - window[0][2]) / span
+    # End to end: the chunk that completes frame k -> receipt of the k-th contact message.
+    completes = _frame_chunks(audio_rate=audio_rate, n_chunks=pub['audio_chunks'], chunk=chunk)
+    received = [t for t, _ in got['contact']]
+    e2e = []
+    if len(received) == completes.size:
+        sent = np.asarray(pub['audio_times'])[completes]
+        e2e = (np.asarray(received) - sent).tolist()
+    return {'cpu': cpu, 'sys_cpu': sys_cpu, 'audio': served['audio'],
+            'wrench': served['wrench'], 'e2e': e2e, 'frames': len(received),
+            'node_frames': served['counts']['frames'], 'expected': int(completes.size),
+            'model_id': served['model_id'], 'late_p99_ms': pub['late_p99_ms']}
+
+
+def _pct(values, q) -> float:
+    return 1e3 * float(np.percentile(values, q)) if len(values) else math.nan
+
+
+def _pair(runs, key) -> str:
+    """'p50 / p99' in ms, medians over runs; '-' where no callback of that kind published."""
+    runs = [r for r in runs if len(r[key])]
+    if not runs:
+        return '-'
+    p50 = statistics.median(_pct(r[key], 50) for r in runs)
+    p99 = statistics.median(_pct(r[key], 99) for r in runs)
+    return f'{p50:.3f} / {p99:.3f}'
+
+
+def replay(*, model: str, audio_rate: int, ft_rate: float) -> dict:
+    """
+    Call the node's callbacks directly with real messages of a trial (no DDS, no executor).
+
+    Measures the node's own work: adapters, detector, publishing (no subscriber).
+    """
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.parameter import Parameter
+    from rclpy.time import Time
+    from std_msgs.msg import Int16MultiArray
+
+    from contact_detector.ros.node import ContactDetectorNode
+    from contact_detector.sim.trial import simulate_trial
+    import node_support
+    from test_node import wrench_msg
+
+    trial = simulate_trial(seed=3, index=21, hits='hand', audio_rate=audio_rate,
+                           ft_rate=ft_rate, chunk_size=audio_rate // 100)
+    messages = []
+    for e in node_support.trial_events(trial):
+        if e.kind == 'audio':
+            msg = Int16MultiArray()
+            msg.data = trial.audio[e.lo:e.hi]
+        else:
+            msg = wrench_msg(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
+        messages.append((e.kind, msg, Time(nanoseconds=int(round(e.t * 1e9)))))
+    context = Context()
+    rclpy.init(context=context, args=['--ros-args', '--log-level', 'warn'])
+    node = ContactDetectorNode(context=context, parameter_overrides=[
+        Parameter('model.path', value=model),
+        Parameter('audio.sample_rate', value=float(audio_rate)),
+        Parameter('wrench.rate', value=float(ft_rate)),
+        Parameter('use_sim_time', value=True)])
+    clock = node.get_clock()
+    gc.collect()
+    gc.freeze()
+    cpu_per_call = {'audio': [], 'wrench': []}
+    start = time.thread_time()
+    for kind, msg, receive_time in messages:
+        clock.set_ros_time_override(receive_time)      # as /clock would: the log time
+        before = time.thread_time()
+        (node._on_audio if kind == 'audio' else node._on_wrench)(msg)
+        cpu_per_call[kind].append(time.thread_time() - before)
+    cpu = (time.thread_time() - start) / (trial.end_time - trial.start_time)
+    counts = node.detector_counts()
+    if counts['audio_dropped'] or counts['wrench_dropped'] or counts['frames'] < 800:
+        raise RuntimeError(f'replay went wrong: {counts}')
+    out = {'cpu': cpu, 'audio': node.latency_samples('audio').tolist(),
+           'wrench': node.latency_samples('wrench').tolist(), 'frames': counts['frames'],
+           'audio_cpu': cpu_per_call['audio'], 'wrench_cpu': cpu_per_call['wrench']}
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+    gc.unfreeze()
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('cmd', nargs='?', default='bench', choices=('bench', '_serve'))
+    parser.add_argument('--repeats', type=int, default=3)
+    parser.add_argument('--model', default='')
+    parser.add_argument('--audio-rate', type=int, default=16000)
+    parser.add_argument('--ft-rate', type=float, default=100.0)
+    parser.add_argument('--out', default='')
+    parser.add_argument('--executor', default='hot_path',
+                        choices=('hot_path', 'single_threaded'))
+    args = parser.parse_args()
+    if args.cmd == '_serve':
+        serve(args)
+        return
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    os.environ['ROS_STATIC_PEERS'] = ''
+    os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
+    sys.path.insert(0, str(REPO / 'test'))
+    import node_support
+    work = Path(tempfile.mkdtemp(prefix='bench_node_'))
+    model = args.model or str(node_support.model_path(work))
+    print(f'node benchmark, model {model}, median of {args.repeats} runs, '
+          f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n')
+
+    print('In-process replay: callbacks called with real messages, no DDS (the work of the '
+          'node itself)\n')
+    print('| audio | F/T | node CPU, % of one core | audio callback p50 / p99 (ms) '
+          '| wrench callback p50 / p99 (ms) | CPU time per audio / wrench callback, '
+          'p50 / p99 (ms) |')
+    print('|---|---|---|---|---|---|')
+    for audio_rate, ft_rate in CONFIGS:
+        runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate)
+                for _ in range(args.repeats)]
+        cpu = statistics.median(100 * r['cpu'] for r in runs)
+        print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} '
+              f'| {_pair(runs, "audio")} | {_pair(runs, "wrench")} '
+              f'| {_pair(runs, "audio_cpu")}; {_pair(runs, "wrench_cpu")} |', flush=True)
+
+    print(f'\nLive: publisher, node ({args.executor} executor) and listener processes on '
+          'loopback DDS, one simulated trial (~9 s) at the real rate\n')
+    print('| audio | F/T | node CPU, % of one core (sys) | audio callback p50 / p99 (ms) '
+          '| wrench callback p50 / p99 (ms) | end to end p50 / p99 (ms) '
+          '| frames: node / listener / expected, per run |')
+    print('|---|---|---|---|---|---|---|')
+    for audio_rate, ft_rate in CONFIGS:
+        runs = [run_once(model=model, audio_rate=audio_rate, ft_rate=ft_rate, work=work,
+                         executor=args.executor)
+                for _ in range(args.repeats)]
+        cpu = statistics.median(100 * r['cpu'] for r in runs)
+        sys_cpu = statistics.median(100 * r['sys_cpu'] for r in runs)
+        frames = ', '.join(f'{r["node_frames"]}/{r["frames"]}/{r["expected"]}' for r in runs)
+        print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} ({sys_cpu:.1f}) '
+              f'| {_pair(runs, "audio")} | {_pair(runs, "wrench")} | {_pair(runs, "e2e")} '
+              f'| {frames} |', flush=True)
+    print(f'\nmodel id {runs[0]["model_id"]}; publisher lateness p99 '
+          f'{runs[0]["late_p99_ms"]:.2f} ms; logs in {work}')
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,221 @@
+"""
+Offline tools: real-time factor of ``detect``, and the forest against the baselines.
+
+(a) **Real-time factor** of ``contact-detector detect`` in one process on one core: simulated
+trials (every condition set) are written as bags, then each bag is decoded and run through a
+fresh detector exactly as ``detect`` does (:func:`contact_detector.cli.detect.detect_bag`).
+Per bag, RTF = bag duration / processing time; the median over bags is reported (wall time and
+CPU time of this process), with the split into bag decoding (rosbags + message adapters) and the
+detector (feature core + forest + release logic), and the whole ``detect`` command over the
+folder (model load and JSONL writing included). The target is >= 200x.
+
+(b) **Forest vs baselines** on a held-out simulated set of every condition (a seed the model
+was not trained on): ``evaluate --detector all`` scores every detector on the same trials; the
+comparison table and the detected / premature counts by condition are printed, and the full
+report (summary.md, metrics.json, trials.json, latency.png) is written to ``WORK/report``.
+
+Uses the shipped ``models/contact_forest.joblib`` if present, else ``--model``. Prints markdown.
+
+Usage::
+
+    python benchmarks/bench_offline.py [--model M] [--rtf-trials 16] [--trials 60]
+                                       [--seed 1000] [--work DIR] [--skip-rtf] [--skip-compare]
+"""
+
+import argparse
+from datetime import datetime, timezone
+import io
+import os
+from pathlib import Path
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from typing import List, Optional, Sequence
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from contact_detector.cli import detect as detect_cli  # noqa: E402
+from contact_detector.cli import evaluate as evaluate_cli  # noqa: E402
+from contact_detector.detection.offline import run_detector  # noqa: E402
+from contact_detector.errors import ContactDetectorError  # noqa: E402
+from contact_detector.io.bags import find_bags, open_reader  # noqa: E402
+from contact_detector.io.sensor_stream import load_events, StreamSpec  # noqa: E402
+from contact_detector.model.bundle import default_model_path  # noqa: E402
+from contact_detector.sim.bag_writer import (manifest_entry, write_manifest,  # noqa: E402
+                                             write_trial_bag)
+from contact_detector.sim.trial import simulate_trials  # noqa: E402
+
+
+def emit(*lines: str) -> None:
+    """Print each argument on a line of its own ('' = an empty line)."""
+    print(*lines, sep='\n', flush=True)
+
+
+def cpu_name() -> str:
+    """Return the CPU model name from /proc/cpuinfo, else the platform's."""
+    try:
+        for line in Path('/proc/cpuinfo').read_text().splitlines():
+            if line.startswith('model name'):
+                return line.split(':', 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def simulate(*, out: Path, n: int, seed: int, storage: str, audio_rate: int) -> List[Path]:
+    """Write ``n`` trials of every condition set as bags plus a manifest; return the bags."""
+    records = []
+    for trial in simulate_trials(n=n, seed=seed, conditions=['all'], audio_rate=audio_rate):
+        write_trial_bag(trial=trial, path=out / trial.name, storage=storage)
+        records.append(manifest_entry(trial))
+    write_manifest(trials=records, out_dir=out, settings={'seed': seed, 'trials': n})
+    return find_bags([out])
+
+
+def bag_duration(bag: Path) -> float:
+    """Bag duration in seconds: last minus first log time."""
+    with open_reader(bag) as reader:
+        return (reader.end_time - reader.start_time) * 1e-9
+
+
+def _clock() -> tuple:
+    return time.perf_counter(), time.process_time()
+
+
+def real_time_factor(*, bags: Sequence[Path], model: Path, audio_rate: float) -> dict:
+    """Time detect's per-bag work; return the per-bag figures and their medians."""
+    make, stream = detect_cli.build_detector_factory(model=model, params_file=None,
+                                                     audio_rate=audio_rate)
+    spec = StreamSpec(**stream)
+    make()                                   # warm caches (compiled forest, FFT plans)
+    rows = []
+    for bag in bags:
+        duration = bag_duration(bag)
+        w0, c0 = _clock()
+        run = detect_cli.detect_bag(bag=bag, make_detector=make, spec=spec)
+        w1, c1 = _clock()
+        events = load_events(bag, spec=spec)
+        w2, _ = _clock()
+        run_detector(events, detector=make())
+        w3, _ = _clock()
+        rows.append({'bag': bag.name, 'duration_s': duration, 'frames': len(run.t),
+                     'wall_s': w1 - w0, 'cpu_s': c1 - c0, 'decode_s': w2 - w1,
+                     'detector_s': w3 - w2})
+    med = {key: statistics.median(r['duration_s'] / r[key] for r in rows)
+           for key in ('wall_s', 'cpu_s', 'decode_s', 'detector_s')}
+    return {'rows': rows, 'median_rtf': med,
+            'frames_per_s': statistics.median(r['frames'] / r['wall_s'] for r in rows)}
+
+
+def whole_command(*, folder: Path, model: Path, out: Path) -> float:
+    """Wall time of ``contact-detector detect FOLDER`` in-process (model load, JSONL)."""
+    t0 = time.perf_counter()
+    stdout, sys.stdout = sys.stdout, io.StringIO()
+    try:
+        code = detect_cli.main([str(folder), '--model', str(model), '--out', str(out)])
+    finally:
+        sys.stdout = stdout
+    if code != 0:
+        raise SystemExit('detect failed')
+    return time.perf_counter() - t0
+
+
+def by_condition_table(results: dict) -> str:
+    """Return detected / premature counts per condition set (rows) and detector (columns)."""
+    detectors = list(results)
+    conditions = [c for c in results[detectors[0]]['summary'] if c != 'all'] + ['all']
+    lines = ['| condition | ' + ' | '.join(detectors) + ' |',
+             '|---|' + '---|' * len(detectors)]
+    for condition in conditions:
+        cells = []
+        for name in detectors:
+            s = results[name]['summary'][condition]
+            cells.append(f"{s['detected']}/{s['trials']} ({s['premature']})")
+        lines.append(f'| {condition} | ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = argparse.ArgumentParser(prog='bench_offline', description=__doc__.split('\n')[1])
+    parser.add_argument('--model', type=Path, default=None,
+                        help='model bundle (default: the shipped models/contact_forest.joblib)')
+    parser.add_argument('--rtf-trials', type=int, default=16, help='bags timed for (a)')
+    parser.add_argument('--trials', type=int, default=60, help='held-out trials for (b)')
+    parser.add_argument('--seed', type=int, default=1000,
+                        help='simulator seed of the held-out set (not a training seed)')
+    parser.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
+    parser.add_argument('--audio-rate', type=int, default=16000)
+    parser.add_argument('--work', type=Path, default=None,
+                        help='keep bags and the report here (default: a temporary directory)')
+    parser.add_argument('--skip-rtf', action='store_true')
+    parser.add_argument('--skip-compare', action='store_true')
+    args = parser.parse_args(argv)
+    try:
+        model = args.model or default_model_path()
+    except ContactDetectorError as err:
+        print(f'bench_offline: {err}; train one and pass --model', file=sys.stderr)
+        return 1
+    tmp = None
+    if args.work is None:
+        tmp = tempfile.TemporaryDirectory(prefix='bench_offline_')
+        work = Path(tmp.name)
+    else:
+        work = args.work
+        work.mkdir(parents=True, exist_ok=True)
+    load = os.getloadavg()
+    emit('# bench_offline', '')
+    emit(f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, {cpu_name()}, '
+         f'{os.cpu_count()} cores, load {load[0]:.2f}, Python {platform.python_version()}; '
+         f'model `{model}`; {args.storage} bags, {args.audio_rate} Hz audio.', '')
+
+    if not args.skip_rtf:
+        folder = work / 'rtf'
+        bags = simulate(out=folder, n=args.rtf_trials, seed=args.seed + 1,
+                        storage=args.storage, audio_rate=args.audio_rate)
+        rtf = real_time_factor(bags=bags, model=model, audio_rate=args.audio_rate)
+        total_s = sum(r['duration_s'] for r in rtf['rows'])
+        command_s = whole_command(folder=folder, model=model, out=work / 'rtf.jsonl')
+        m = rtf['median_rtf']
+        emit(f'## (a) detect real-time factor ({len(bags)} bags, {total_s:.0f} s of '
+             'recordings, one process)', '',
+             '| figure | median over bags |', '|---|---|',
+             f"| RTF, decoding + detector (wall) | {m['wall_s']:.1f}x |",
+             f"| RTF, decoding + detector (CPU of this process) | {m['cpu_s']:.1f}x |",
+             f"| RTF, bag decoding only | {m['decode_s']:.1f}x |",
+             f"| RTF, detector only (decoded events) | {m['detector_s']:.1f}x |",
+             f"| audio frames per second of processing | {rtf['frames_per_s']:.0f} |",
+             f'| whole `detect` command over the folder (wall) | {total_s / command_s:.1f}x '
+             f'({command_s:.1f} s) |', '',
+             f"Target >= 200x: {'met' if m['wall_s'] >= 200 else 'NOT met'} (wall), "
+             f"{'met' if m['cpu_s'] >= 200 else 'NOT met'} (CPU).", '')
+
+    if not args.skip_compare:
+        folder = work / 'heldout'
+        bags = simulate(out=folder, n=args.trials, seed=args.seed, storage=args.storage,
+                        audio_rate=args.audio_rate)
+        make, stream = detect_cli.build_detector_factory(model=model, params_file=None,
+                                                         audio_rate=args.audio_rate)
+        probe = make()
+        t0 = time.perf_counter()
+        results = evaluate_cli.evaluate(
+            bags=bags, detectors=list(evaluate_cli.DETECTORS), make_forest=make,
+            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
+            wrench_rate=probe.settings.wrench_rate, label_window=probe.bundle.label_window)
+        elapsed = time.perf_counter() - t0
+        evaluate_cli.write_report(report=work / 'report', results=results)
+        emit(f'## (b) forest vs baselines ({len(bags)} held-out trials, seed {args.seed}, '
+             f'every condition set; {elapsed:.0f} s)', '')
+        emit(evaluate_cli.comparison_table(results), '')
+        emit('Detected / trials (premature) by condition:', '')
+        emit(by_condition_table(results), '')
+        emit(f"Report: `{work / 'report' / 'summary.md'}`"
+             + (' (temporary)' if tmp else ''), '')
+    if tmp is not None:
+        tmp.cleanup()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""Score every decision rule with a trained model bundle (the shipped one by default).
+
+The sweep (``contact-detector sweep``) trains a forest per setting on all training trials; the
+shipped model is trained by the paper's protocol on 75% of them. This script checks the rule
+choice on the model that actually ships: on its own trial-split test trials and on a held-out
+simulated set. It is how the default rule in docs/sweep.md was validated.
+
+    python benchmarks/rule_check.py data/train data/heldout [--model models/contact_forest.joblib]
+"""
+
+import argparse
+from pathlib import Path
+
+from contact_detector.cli.sweep import decode, rule_grid
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
+from contact_detector.model.sweep import (compute_frames, FeatureSetting, rows_markdown,
+                                          score_rules)
+from contact_detector.model.training import LabelWindow
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('train', help='the training folder (its test trials are scored)')
+    parser.add_argument('heldout', help='a held-out folder of simulated trials')
+    parser.add_argument('--model', type=Path, default=None)
+    parser.add_argument('--jobs', type=int, default=2)
+    args = parser.parse_args()
+    bundle = load_bundle(path=args.model or default_model_path())
+    test_names = set(bundle.training.get('test_trials', []))
+    spec = StreamSpec()
+    own = decode([p for p in find_bags([args.train]) if p.name in test_names], spec, 'train')
+    heldout = decode(find_bags([args.heldout]), spec, 'heldout')
+    setting = FeatureSetting('shipped', bundle.feature_config,
+                             LabelWindow(**bundle.label_window))
+    rules = rule_grid() + [DecisionRule(threshold=t, confirm_frames=k)
+                           for t in (0.6, 0.8) for k in (1, 2, 3)]
+    rate = bundle.training.get('audio_rate', 16000.0)
+    wrench = bundle.training.get('wrench_rate', 100.0)
+    for tag, events in ((f'own {len(own)} test trials', own),
+                        (f'{len(heldout)} held-out', heldout)):
+        if not events:
+            continue
+        frames = compute_frames(events_by_trial=events, config=bundle.feature_config,
+                                audio_rate=rate, wrench_rate=wrench, jobs=args.jobs)
+        rows = score_rules(forest=bundle.forest, frames=list(frames.values()),
+                           setting=setting, rules=rules)
+        for row in rows:
+            row.setting = tag
+        print(rows_markdown(rows), flush=True)
+        print()
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,88 @@
+"""Three processes over DDS (loopback): trial publisher at the real rate, the node, a listener.
+
+The publisher plays a simulated trial with in-air hand hits before the contact, its times
+shifted to the wall clock; the node runs as ``python -m contact_detector.ros.node`` with its
+default parameters from params/contact_detector.yaml (best-effort sensor-data QoS,
+audio stamped on receipt, the hot-path executor); the listener
+records ``contact`` and ``release``. The release must come after the true onset, within the
+latency budget, and be the only one.
+"""
+
+import json
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+import node_support
+
+HERE = Path(__file__).resolve().parent
+#: Largest accepted delay from the true onset to the release message, s.
+LATENCY_BUDGET_S = 0.3
+
+
+@pytest.fixture(scope='module')
+def model(tmp_path_factory):
+    return node_support.model_path(tmp_path_factory.mktemp('model'))
+
+
+def _start(args, log: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, *args], cwd=HERE.parent, env=dict(os.environ),
+                            stdout=open(log, 'w'), stderr=subprocess.STDOUT)
+
+
+def _stop(proc: subprocess.Popen, timeout: float = 10.0) -> int:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            return proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            return proc.wait()
+    return proc.returncode
+
+
+def test_release_after_onset_across_processes(model, tmp_path):
+    pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
+                                   tmp_path / 'stop')
+    params = HERE.parent / 'params' / 'contact_detector.yaml'
+    node = _start(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
+                   '-p', f'model.path:={model}'], tmp_path / 'node.log')
+    listener = _start([str(HERE / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
+                       '--stop-file', str(stop), '--max-s', '90'], tmp_path / 'listen.log')
+    publisher = _start([str(HERE / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+                        '--after-onset', '1.5'], tmp_path / 'pub.log')
+    try:
+        publisher.wait(timeout=75)
+        time.sleep(0.5)
+        stop.touch()
+        listener.wait(timeout=15)
+    finally:
+        stop.touch()
+        for proc in (publisher, listener):
+            if proc.poll() is None:
+                proc.kill()
+        node_code = _stop(node)
+    logs = {name: (tmp_path / f'{name}.log').read_text() for name in ('node', 'listen', 'pub')}
+    assert publisher.returncode == 0, logs['pub']
+    assert listener.returncode == 0, logs['listen']
+    assert node_code == 0, logs['node']            # SIGINT is a clean shutdown
+
+    pub = json.loads(pub_json.read_text())
+    got = json.loads(listen_json.read_text())
+    onset = pub['onset_wall']
+    in_air = [i['t_wall'] for i in pub['impacts'] if i['in_air'] and i['t_wall'] < onset]
+    assert in_air, 'the trial must have exogenous impacts in the air before the contact'
+    releases = [t for t, value in got['release'] if value]
+    assert len(releases) == 1, (releases, onset, logs['node'])
+    delay = releases[0] - onset
+    assert 0.0 < delay <= LATENCY_BUDGET_S, (delay, logs['node'])
+    # A decision for (nearly) every 10 ms audio frame of the trial reached the listener.
+    seconds = pub['audio_samples'] / 16000.0
+    assert len(got['contact']) >= 0.9 * seconds * 100, (len(got['contact']), seconds)
+    assert abs(len(got['contact']) - len(got['contact_probability'])) <= 0.02 * seconds * 100
+    assert 'RELEASE' in logs['node']

@@ -1,0 +1,508 @@
+"""The offline tools on simulated bags: detect (the JSONL contract), evaluate, train, baselines.
+
+A module fixture simulates eight short trials (every condition set) into sqlite3 bags and trains
+a small model on them with ``contact-detector train``, so nothing here depends on the shipped
+model. ``detect`` over all of them runs once through the console script; the other checks run
+the commands in-process on single bags.
+"""
+
+import json
+import math
+import os
+from pathlib import Path
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import Writer
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
+
+from contact_detector.cli import main as cli_main
+from contact_detector.cli import train as train_cli
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.errors import ConfigError
+from contact_detector.evaluation.baselines import BASELINES, make_baseline
+from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize,
+                                                 summarize_by_condition, Truth)
+from contact_detector.io.bags import jazzy_typestore, open_reader
+from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, WrenchEvent)
+from contact_detector.model.bundle import load_bundle
+from contact_detector.sim import simulate_trial, simulate_trials
+from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+
+SEED = 11
+N_TRIALS = 8
+AUDIO_DATA = 'audio_common_msgs/msg/AudioData'
+#: ros-drivers/audio_common's AudioData.msg (ROS 2 branch), verbatim.
+AUDIO_DATA_MSG = 'uint8[] data\n'
+FRAME_KEYS = {'bag', 't', 'p', 'contact'}
+RELEASE_KEYS = {'bag', 't', 'event'}
+
+
+def _cli_command() -> list:
+    script = Path(sys.executable).with_name('contact-detector')
+    if script.exists():
+        return [str(script)]
+    return [sys.executable, '-m', 'contact_detector.cli.main']
+
+
+def run_cli(*args, check: bool = True) -> subprocess.CompletedProcess:
+    """Run ``contact-detector ARGS`` as a process (the console script when installed)."""
+    result = subprocess.run([*_cli_command(), *map(str, args)], capture_output=True,
+                            text=True, env=dict(os.environ), timeout=120)
+    if check:
+        assert result.returncode == 0, result.stderr[-3000:]
+    return result
+
+
+def read_jsonl(path: Path) -> list:
+    return [json.loads(line) for line in Path(path).read_text().splitlines()]
+
+
+def frames_of(rows: list, bag: str) -> list:
+    return [r for r in rows if r['bag'] == bag and 'p' in r]
+
+
+def releases_of(rows: list, bag: str) -> list:
+    return [r['t'] for r in rows if r['bag'] == bag and r.get('event') == 'release']
+
+
+def detect(tmp: Path, *bags, args=()) -> list:
+    """Run ``detect`` in-process on ``bags``; return the parsed JSONL rows."""
+    out = tmp / f'detect_{len(list(tmp.glob("detect_*")))}.jsonl'
+    assert cli_main.main(['detect', *map(str, bags), '--out', str(out), *map(str, args)]) == 0
+    return read_jsonl(out)
+
+
+def copy_bag(src: Path, dst: Path, *, drop=(), audio_data: bool = False) -> Path:
+    """
+    Copy a bag message by message, dropping topics; optionally re-type /audio as AudioData.
+
+    The AudioData type is registered from its .msg text in a typestore of its own (never in
+    the tools' shared one), and the writer embeds its definition in the bag, as ``ros2 bag
+    record`` does.
+    """
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(get_types_from_msg(AUDIO_DATA_MSG, AUDIO_DATA))
+    audio_cls = store.types[AUDIO_DATA]
+    with AnyReader([src], default_typestore=jazzy_typestore()) as reader, \
+            Writer(dst, version=9) as writer:
+        conns = {}
+        for c in reader.connections:
+            if c.topic in drop:
+                continue
+            msgtype = AUDIO_DATA if audio_data and c.topic == '/audio' else c.msgtype
+            conns[c.topic] = writer.add_connection(c.topic, msgtype, typestore=store)
+        for c, log_ns, raw in reader.messages(connections=[c for c in reader.connections
+                                                           if c.topic in conns]):
+            if audio_data and c.topic == '/audio':
+                pcm = np.asarray(reader.deserialize(raw, c.msgtype).data, dtype='<i2')
+                raw = store.serialize_cdr(audio_cls(data=pcm.view(np.uint8)), AUDIO_DATA)
+            writer.write(conns[c.topic], log_ns, raw)
+    return dst
+
+
+def write_params(path: Path, **values) -> Path:
+    """Write a node parameter file (``contact_detector_node: ros__parameters:``)."""
+    import yaml
+    path.write_text(yaml.safe_dump({'contact_detector_node': {'ros__parameters': values}}))
+    return path
+
+
+@pytest.fixture(scope='module')
+def data(tmp_path_factory):
+    root = tmp_path_factory.mktemp('offline')
+    bags = root / 'bags'
+    trials = list(simulate_trials(n=N_TRIALS, seed=SEED, conditions=['all']))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=bags / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=bags)
+    model = root / 'm.joblib'
+    assert train_cli.main([str(bags), '--no-events', '--jobs', '1', '--out', str(model)]) == 0
+    return {'root': root, 'bags': bags, 'trials': {t.name: t for t in trials}, 'model': model,
+            'bundle': load_bundle(path=model)}
+
+
+@pytest.fixture(scope='module')
+def all_rows(data):
+    """``contact-detector detect BAGS_DIR`` (the console script) over every trial."""
+    out = data['root'] / 'all.jsonl'
+    run_cli('detect', data['bags'], '--model', data['model'], '--out', out)
+    return read_jsonl(out)
+
+
+# --- detect: the contract -----------------------------------------------------------------------
+
+def test_detect_jsonl_schema_frames_and_times(data, all_rows):
+    trials = data['trials']
+    assert list(dict.fromkeys(r['bag'] for r in all_rows)) == sorted(trials)
+    config = data['bundle'].feature_config
+    for name, trial in trials.items():
+        rows = [r for r in all_rows if r['bag'] == name]
+        for r in rows:
+            if 'event' in r:
+                assert set(r) == RELEASE_KEYS and r['event'] == 'release'
+                assert isinstance(r['t'], float)
+            else:
+                assert set(r) == FRAME_KEYS
+                assert isinstance(r['t'], float) and isinstance(r['p'], float)
+                assert isinstance(r['contact'], bool) and 0.0 <= r['p'] <= 1.0
+        frames = frames_of(rows, name)
+        t = np.array([r['t'] for r in frames])
+        # One line per audio frame: (samples - frame length) / hop + 1, i.e. 100 per second.
+        rate = trial.audio_rate
+        length, hop = config.audio_frame_samples(rate), config.audio_hop_s * rate
+        assert len(frames) == int((trial.audio.size - length) // hop) + 1
+        assert len(frames) / (trial.audio.size / rate) == pytest.approx(1 / config.audio_hop_s,
+                                                                        rel=0.05)
+        # Absolute bag time of the frame's last sample: inside the bag, increasing, and at
+        # most a few ms after the true sample time (stamps come from log times >= sample time).
+        with open_reader(data['bags'] / name) as reader:
+            start, end = reader.start_time * 1e-9, reader.end_time * 1e-9
+        assert start <= t[0] and t[-1] <= end
+        assert np.all(np.diff(t) > 0)
+        true_t = trial.audio_time(length - 1 + np.arange(t.size) * hop)
+        assert np.all(t - true_t > -1e-6) and np.all(t - true_t < 0.005)
+        # At most one release (armed from the start, a release disarms), right after the
+        # contact frame that fired it.
+        assert len(releases_of(rows, name)) <= 1
+        for i, r in enumerate(rows):
+            if 'event' in r:
+                assert i > 0 and 'p' in rows[i - 1]
+                assert rows[i - 1]['t'] == r['t'] and rows[i - 1]['contact']
+    assert sum(len(releases_of(all_rows, n)) for n in trials) >= N_TRIALS // 2
+
+
+def test_detect_equals_the_detector_run_directly(data, all_rows):
+    name = 'trial_0000'
+    events = load_events(data['bags'] / name)
+    detector = ContactDetector(bundle=data['bundle'], settings=DetectorSettings())
+    blocks = []
+    for e in events:
+        if isinstance(e, AudioEvent):
+            blocks.append(detector.on_audio(e.samples, stamp=e.stamp, now=e.now))
+        elif isinstance(e, WrenchEvent):
+            blocks.append(detector.on_wrench(t=e.t, force=e.force, torque=e.torque, now=e.now))
+        elif isinstance(e, BadEvent):
+            blocks.append(detector.drop(kind=e.kind, reason=e.reason, stamp=e.now))
+    blocks.append(detector.flush())
+    frames = frames_of(all_rows, name)
+    assert np.array_equal([r['t'] for r in frames], np.concatenate([b.t for b in blocks]))
+    assert np.array_equal([r['p'] for r in frames], np.concatenate([b.p for b in blocks]))
+    assert np.array_equal([r['contact'] for r in frames],
+                          np.concatenate([b.contact for b in blocks]))
+    assert releases_of(all_rows, name) == [t for b in blocks for t in b.releases]
+
+
+def test_mcap_bag_gives_identical_output(data, all_rows, tmp_path):
+    trial = data['trials']['trial_0001']
+    bag = write_trial_bag(trial=trial, path=tmp_path / 'mcap' / trial.name, storage='mcap')
+    assert list(bag.glob('*.mcap'))
+    rows = detect(tmp_path, bag, args=['--model', data['model']])
+    assert rows == [r for r in all_rows if r['bag'] == trial.name]
+
+
+def test_44k_audio_with_audio_rate(data, all_rows, tmp_path):
+    name = 'trial_0000'
+    ref = data['trials'][name]
+    trial = simulate_trial(seed=SEED, index=ref.index, condition=ref.condition,
+                           hits=ref.impacts[0].kind if ref.impacts else 'none',
+                           audio_rate=44100)
+    assert trial.onset_t == ref.onset_t and trial.audio.size > 2.7 * ref.audio.size
+    bag = write_trial_bag(trial=trial, path=tmp_path / 'k44' / name)
+    rows = detect(tmp_path, bag, args=['--model', data['model'], '--audio-rate', '44100'])
+    t44 = np.array([r['t'] for r in frames_of(rows, name)])
+    p44 = np.array([r['p'] for r in frames_of(rows, name)])
+    frames16 = frames_of(all_rows, name)
+    t16 = np.array([r['t'] for r in frames16])
+    p16 = np.array([r['p'] for r in frames16])
+    # Frames are defined in seconds: same count, same times within one (16 kHz) sample.
+    assert t44.size == t16.size
+    assert np.max(np.abs(t44 - t16)) <= 1 / 16000 + 1e-9
+    assert np.corrcoef(p44, p16)[0, 1] > 0.8
+    rel44, rel16 = releases_of(rows, name), releases_of(all_rows, name)
+    assert len(rel44) == len(rel16) <= 1
+    assert all(abs(a - b) < 0.05 for a, b in zip(rel44, rel16))
+    # --audio-rate overrides audio.sample_rate of --params.
+    params = write_params(tmp_path / 'rate.yaml', audio={'sample_rate': 16000.0})
+    assert detect(tmp_path, bag, args=['--model', data['model'], '--params', params,
+                                       '--audio-rate', '44100']) == rows
+
+
+def test_odd_chunking(data, all_rows):
+    name, trial = next((n, t) for n, t in data['trials'].items()
+                       if t.condition == 'odd_chunking')
+    sizes = np.diff(np.concatenate([[0], trial.chunk_ends]))
+    assert sizes.min() < 100 and sizes.max() > 1000     # the bag really is oddly chunked
+    t = np.array([r['t'] for r in frames_of(all_rows, name)])
+    assert np.allclose(np.diff(t), data['bundle'].feature_config.audio_hop_s, atol=1e-3)
+
+
+def test_audio_common_audio_data_bag(data, all_rows, tmp_path, capsys):
+    name = 'trial_0002'
+    assert AUDIO_DATA not in jazzy_typestore().fielddefs   # only the bag's definition helps
+    bag = copy_bag(data['bags'] / name, tmp_path / 'ad' / name, audio_data=True)
+    with open_reader(bag) as reader:
+        audio = next(c for c in reader.connections if c.topic == '/audio')
+        assert audio.msgtype == AUDIO_DATA and 'uint8[] data' in audio.msgdef.data
+    params = write_params(tmp_path / 'ad.yaml',
+                          audio={'msg_type': AUDIO_DATA, 'sample_rate': 16000.0,
+                                 'wait_for_info': False})
+    rows = detect(tmp_path, bag, args=['--model', data['model'], '--params', params])
+    assert rows == [r for r in all_rows if r['bag'] == name]
+    # The same parameters on a bag of another audio type: a clear error, not silence.
+    capsys.readouterr()
+    assert cli_main.main(['detect', str(data['bags'] / name), '--model', str(data['model']),
+                          '--params', str(params), '--out', str(tmp_path / 'x.jsonl')]) == 1
+    err = capsys.readouterr().err
+    assert 'std_msgs/msg/Int16MultiArray' in err and 'audio.msg_type' in err
+
+
+def test_params_file_values_take_effect(data, all_rows, tmp_path):
+    name = 'trial_0000'
+    params = write_params(tmp_path / 'p.yaml', release={'threshold': 0.0}, warmup_s=1.5)
+    rows = detect(tmp_path, data['bags'] / name,
+                  args=['--model', data['model'], '--params', params])
+    frames, ref = frames_of(rows, name), frames_of(all_rows, name)
+    assert [r['p'] for r in frames] == [r['p'] for r in ref]      # the forest is unchanged
+    t = np.array([r['t'] for r in frames])
+    warm = t >= t[0] + 1.5
+    # Threshold 0: every frame after the 1.5 s warm-up is contact; the release fires at once.
+    assert np.array_equal([r['contact'] for r in frames], warm)
+    assert releases_of(rows, name) == [float(t[warm][0])]
+    assert releases_of(rows, name) != releases_of(all_rows, name)
+
+
+def test_detect_errors_are_clean(data, tmp_path, capsys):
+    assert cli_main.main(['detect', str(tmp_path / 'nope'), '--model', str(data['model']),
+                          '--out', str(tmp_path / 'x.jsonl')]) == 1
+    assert 'no such bag' in capsys.readouterr().err
+    assert cli_main.main(['detect', str(data['bags'] / 'trial_0000'), '--model',
+                          str(tmp_path / 'missing.joblib'), '--out',
+                          str(tmp_path / 'x.jsonl')]) == 1
+    assert 'missing.joblib' in capsys.readouterr().err
+
+
+# --- evaluate ------------------------------------------------------------------------------------
+
+def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
+    names = ['trial_0000', 'trial_0003', 'trial_0005']
+    report = tmp_path / 'report'
+    assert cli_main.main(['evaluate', *[str(data['bags'] / n) for n in names], '--model',
+                          str(data['model']), '--detector', 'all', '--report',
+                          str(report)]) == 0
+    printed = capsys.readouterr().out
+    for file in ('summary.md', 'metrics.json', 'trials.json', 'latency.png'):
+        assert (report / file).is_file()
+    assert (report / 'latency.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+    detectors = ('forest',) + BASELINES
+    summary = (report / 'summary.md').read_text()
+    table = [line for line in summary.splitlines() if line.startswith('| ')]
+    for detector in detectors:
+        rows = [line for line in table if line.startswith(f'| {detector} | ')]
+        assert len(rows) == 1, detector
+        assert f'| {detector} | 3 |' in printed
+    metrics = json.loads((report / 'metrics.json').read_text())
+    trials = json.loads((report / 'trials.json').read_text())
+    assert set(metrics) == set(trials) == set(detectors)
+    for detector in detectors:
+        s = metrics[detector]['summary']['all']
+        assert s['trials'] == 3
+        assert s['detected'] + s['missed'] + s['late'] + s['premature'] == 3
+        assert [o['name'] for o in trials[detector]] == names
+    # The forest column is detect's output scored: same first release per trial.
+    for outcome in trials['forest']:
+        releases = releases_of(all_rows, outcome['name'])
+        assert outcome['release_t'] == (releases[0] if releases else None)
+        onset = data['trials'][outcome['name']].onset_t
+        assert outcome['onset_t'] == pytest.approx(onset)
+    assert metrics['forest']['frames']['contact']['support'] > 0
+
+
+# --- metrics on hand-made truths ----------------------------------------------------------------
+
+def test_score_trial_verdicts():
+    truth = Truth(name='a', condition='paper', onset_t=10.0, contact_end_t=12.0)
+    cases = [([], 'missed', None), ([9.98], 'premature', -0.02),
+             ([9.995], 'detected', -0.005), ([10.1, 9.0], 'premature', -1.0),
+             ([10.1], 'detected', 0.1), ([10.5], 'detected', 0.5), ([10.6], 'late', 0.6)]
+    for releases, verdict, latency in cases:
+        outcome = score_trial(truth=truth, releases=releases, events=releases)
+        assert outcome.verdict == verdict, releases
+        if latency is None:
+            assert outcome.latency_s is None and outcome.release_t is None
+        else:
+            assert outcome.latency_s == pytest.approx(latency)
+            assert outcome.release_t == min(releases)
+
+
+def test_score_trial_impact_events():
+    impacts = ((5.0, 'hand', True), (11.0, 'table', False), (20.0, 'hand', True))
+    truth = Truth(name='a', condition='noisy', onset_t=10.0, contact_end_t=12.0,
+                  impacts=impacts)
+    events = [4.94,        # 60 ms before an impact: not blamed
+              4.96, 5.4,   # within [-50, +500] ms of the impact at 5 s: blamed
+              11.1,        # during the true contact: the contact, not the impact
+              15.0,        # far from any impact: a false event, not blamed on one
+              20.2]        # after lift-off, near the third impact: blamed
+    outcome = score_trial(truth=truth, releases=[10.05], events=events)
+    assert outcome.verdict == 'detected'
+    assert outcome.impact_events == 3
+    assert outcome.impacts == 3 and outcome.impacts_in_air == 2
+    # Without a lift-off time the contact lasts LATE_S after the onset.
+    short = Truth(name='b', condition='', onset_t=10.0, impacts=((10.6, 'hand', False),))
+    assert score_trial(truth=short, releases=[], events=[10.4, 10.7]).impact_events == 1
+
+
+def test_summaries_and_frame_labels():
+    truths = [Truth(name=str(i), condition=c, onset_t=10.0)
+              for i, c in enumerate(('paper', 'paper', 'soft', 'soft'))]
+    outcomes = [score_trial(truth=tr, releases=r, events=r)
+                for tr, r in zip(truths, ([10.02], [10.06], [], [9.0]))]
+    s = summarize(outcomes)
+    assert (s['trials'], s['detected'], s['missed'], s['premature'], s['late']) == (4, 2, 1, 1, 0)
+    assert s['latency_ms_median'] == pytest.approx(40.0)
+    assert s['latency_ms_max'] == pytest.approx(60.0)
+    by = summarize_by_condition(outcomes)
+    assert set(by) == {'all', 'paper', 'soft'}
+    assert by['soft']['latency_ms_median'] is None and by['paper']['detected'] == 2
+    t = np.array([9.99, 10.0, 10.05, 10.1, 10.2])
+    assert frame_labels(t=t, onsets=[10.0], start_s=0.0, end_s=0.1).tolist() == [0, 1, 1, 0, 0]
+
+
+# --- baselines on synthetic signals -------------------------------------------------------------
+
+def _wrench(*, torque_y=(), force_x=(), seconds: float = 4.0, rest_ty: float = 1.2, seed=0):
+    """100 Hz wrench with noise; ``torque_y``/``force_x`` are (t_rel, size, ramp_s) changes."""
+    rng = np.random.default_rng(seed)
+    t = 100.0 + np.arange(int(seconds * 100)) / 100
+    force = np.array([8.0, 0.2, 0.1]) + rng.normal(0, 0.02, (t.size, 3))
+    torque = np.array([0.1, rest_ty, 0.05]) + rng.normal(0, 0.005, (t.size, 3))
+    for axis, column, changes in ((torque, 1, torque_y), (force, 0, force_x)):
+        for t_rel, size, ramp in changes:
+            rel = t - 100.0 - t_rel
+            axis[:, column] += size * (np.clip(rel / ramp, 0, 1) if ramp else rel >= 0)
+    return t, force, torque
+
+
+def _run_wrench(name, t, force, torque):
+    detector = make_baseline(name, wrench_rate=100.0, audio_rate=16000.0)
+    events = []
+    for i in range(t.size):
+        d = detector.on_wrench(t=t[i:i + 1], force=force[i:i + 1], torque=torque[i:i + 1],
+                               now=t[i])
+        events += d.events
+    return [e - 100.0 for e in events]
+
+
+def test_threshold_baseline():
+    step = _run_wrench('threshold', *_wrench(torque_y=[(2.0, -4.0, 0)]))
+    assert step == [pytest.approx(2.0)]
+    assert _run_wrench('threshold', *_wrench(torque_y=[(2.0, -2.5, 0)])) == []
+    # A 4 N m ramp over 1.5 s crosses 3 N m three quarters of the way.
+    ramp = _run_wrench('threshold', *_wrench(torque_y=[(2.0, -4.0, 1.5)]))
+    assert ramp == [pytest.approx(3.13, abs=0.015)]
+    # Relative to the rest level of the first second, whatever it is.
+    assert _run_wrench('threshold', *_wrench(rest_ty=-7.0)) == []
+
+
+def test_highpass_baseline():
+    assert _run_wrench('highpass', *_wrench()) == []
+    assert _run_wrench('highpass', *_wrench(torque_y=[(2.0, -1.0, 0)])) == [pytest.approx(2.0)]
+    # A slow drift (0.2 N m/s) stays under the high-pass threshold.
+    assert _run_wrench('highpass', *_wrench(torque_y=[(1.5, -0.5, 2.5)])) == []
+    assert _run_wrench('highpass', *_wrench(force_x=[(2.0, 10.0, 0)])) == []   # |T| only
+
+
+def test_lowpass_bandpass_baseline():
+    assert _run_wrench('lowpass-bandpass', *_wrench()) == []
+    slow = _run_wrench('lowpass-bandpass', *_wrench(force_x=[(2.0, 10.0, 0.5)]))
+    assert len(slow) == 1 and 2.0 < slow[0] < 2.3
+    assert _run_wrench('lowpass-bandpass', *_wrench(torque_y=[(2.0, -4.0, 0)])) == []  # |F|
+    # A sharp collision: the band-pass observer vetoes the low-pass one while it rings, so
+    # the event (if any) comes after the impulse, where the high-pass baseline fires at once.
+    t, force, torque = _wrench()
+    force[200:203, 0] += [15.0, -10.0, 5.0]
+    torque[200:203, 1] += [1.5, -1.0, 0.5]
+    assert _run_wrench('highpass', t, force, torque) == [pytest.approx(2.0)]
+    assert all(e > 2.1 for e in _run_wrench('lowpass-bandpass', t, force, torque))
+
+
+def test_audio_onset_baseline():
+    rate = 16000
+
+    def run(db):
+        rng = np.random.default_rng(1)
+        x = rng.normal(0, 100, 4 * rate)
+        x[2 * rate:2 * rate + 1600] *= 10 ** (db / 20)
+        x = np.clip(x, -32768, 32767).astype(np.int16)
+        detector = make_baseline('audio-onset', wrench_rate=100.0, audio_rate=rate)
+        events = []
+        for i in range(0, x.size, 160):
+            stamp = 100.0 + (i + 159) / rate
+            events += detector.on_audio(x[i:i + 160], stamp=stamp, now=stamp).events
+        return [e - 100.0 for e in events]
+    assert run(30.0) == [pytest.approx(2.0, abs=0.035)]
+    assert run(10.0) == []
+
+
+def test_make_baseline_refuses_unknown_names():
+    with pytest.raises(ConfigError, match='unknown detector'):
+        make_baseline('magic', wrench_rate=100.0, audio_rate=16000.0)
+    with pytest.raises(ConfigError, match='wrench rate'):
+        make_baseline('threshold', wrench_rate=math.nan, audio_rate=16000.0)
+
+
+# --- train with --labels, and without any truth ---------------------------------------------
+
+@pytest.fixture(scope='module')
+def no_truth(data):
+    """Four bags without /contact_truth and without a manifest."""
+    out = data['root'] / 'no_truth'
+    names = ['trial_0000', 'trial_0001', 'trial_0002', 'trial_0003']
+    for name in names:
+        copy_bag(data['bags'] / name, out / name, drop=('/contact_truth',))
+    return out, names
+
+
+def test_train_with_labels_csv(data, no_truth, tmp_path):
+    out, names = no_truth
+    labels = tmp_path / 'labels.csv'
+    lines = ['bag,onset_start,onset_end']
+    lines += [f'{n},{data["trials"][n].onset_t!r},{data["trials"][n].onset_end_t!r}'
+              for n in names]
+    labels.write_text('\n'.join(lines) + '\n')
+    model = tmp_path / 'labels.joblib'
+    assert train_cli.main([str(out), '--labels', str(labels), '--no-events', '--jobs', '1',
+                           '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    assert bundle.training['trials'] == 4
+    # The onset window [onset, onset + 0.1 s) holds about ten 10 ms frames per trial.
+    assert 4 * 8 <= bundle.training['contact_frames'] <= 4 * 12
+    # A CSV that misses a bag is refused before any work.
+    labels.write_text('\n'.join(lines[:-1]) + '\n')
+    assert train_cli.main([str(out), '--labels', str(labels), '--jobs', '1', '--out',
+                           str(tmp_path / 'x.joblib')]) == 1
+
+
+def test_no_truth_and_no_labels_is_a_clear_error(data, no_truth, tmp_path, capsys):
+    out, _ = no_truth
+    result = run_cli('train', out, '--no-events', '--jobs', '1', '--out',
+                     tmp_path / 'x.joblib', check=False)
+    assert result.returncode == 1
+    assert 'Traceback' not in result.stderr
+    assert '/contact_truth' in result.stderr and '--labels' in result.stderr
+    assert not (tmp_path / 'x.joblib').exists()
+    # evaluate needs a truth too: a manifest entry or /contact_truth.
+    assert cli_main.main(['evaluate', str(out / 'trial_0000'), '--model',
+                          str(data['model'])]) == 1
+    assert 'no manifest entry and no True on /contact_truth' in capsys.readouterr().err
+
+
+def test_copy_helper_really_drops_the_truth(no_truth):
+    out, names = no_truth
+    with open_reader(out / names[0]) as reader:
+        assert {c.topic for c in reader.connections} == {'/wrist_wrench', '/audio'}
+    assert not (out / 'manifest.json').exists()

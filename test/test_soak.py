@@ -1,0 +1,57 @@
+"""Short soak (the CI version of benchmarks/bench_soak.py): memory stays flat.
+
+Simulated trials played in turn as one continuous stream at full speed, ``tracemalloc`` sampled
+every 30 simulated seconds after a full collection:
+
+* through :class:`ContactDetector` for 3 simulated minutes: the traced memory may not grow by
+  more than 0.5 MB from minute 1 to the end (measured: flat to within a few KiB);
+* through the real node (callbacks called directly, outputs published) for 2 simulated
+  minutes: growth below 2 MB from minute 1 to the end. The node keeps the last 100 000
+  processing latencies per callback kind (bounded; ~0.2 MB per simulated minute until full,
+  see docs/reliability.md), which is all the growth there is.
+
+The full soak (30+ minutes, RSS and tracemalloc per minute) is
+``python benchmarks/bench_soak.py``.
+"""
+
+from pathlib import Path
+import sys
+
+import pytest
+
+import node_support
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
+from bench_soak import make_pool, run_soak  # noqa: E402
+
+from contact_detector.model.bundle import load_bundle  # noqa: E402
+
+
+@pytest.fixture(scope='module')
+def bundle(tmp_path_factory):
+    return load_bundle(path=node_support.model_path(tmp_path_factory.mktemp('model')))
+
+
+@pytest.fixture(scope='module')
+def pool():
+    return make_pool(n=6)
+
+
+def growth_after_minute_1(result) -> float:
+    after = [s.traced_mb for s in result.samples if s.minute >= 1.0]
+    return max(after) - after[0]
+
+
+def test_detector_memory_is_flat(bundle, pool):
+    result = run_soak(bundle=bundle, minutes=3.0, mode='detector', pool=pool, sample_s=30.0)
+    assert result.samples[-1].minute == pytest.approx(3.0)
+    assert result.counts['frames'] > 17000 and result.counts['releases'] >= 5
+    growth = growth_after_minute_1(result)
+    assert growth < 0.5, (growth, result.growth_sites)
+
+
+def test_node_memory_is_bounded(bundle, pool):
+    result = run_soak(bundle=bundle, minutes=2.0, mode='node', pool=pool, sample_s=30.0)
+    assert result.counts['callback_errors'] == 0 and result.counts['frames'] > 11000
+    growth = growth_after_minute_1(result)
+    assert growth < 2.0, (growth, result.growth_sites)
