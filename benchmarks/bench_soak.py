@@ -133,6 +133,7 @@ class SoakResult:
     counts: dict = field(default_factory=dict)
     trials: int = 0
     growth_sites: List[str] = field(default_factory=list)
+    growth: List[tuple] = field(default_factory=list)     # (file, line, bytes, blocks)
 
     def slope(self, key: str) -> float:
         """Least-squares slope of ``key`` over minutes 1.., MB per simulated hour."""
@@ -258,6 +259,8 @@ def run_soak(*, bundle: ModelBundle, minutes: float, mode: str = 'detector',
         if trace and 'snapshot' in base:
             here = str(REPO) + os.sep
             diff = tracemalloc.take_snapshot().compare_to(base['snapshot'], 'lineno')
+            result.growth = [(d.traceback[0].filename, d.traceback[0].lineno, d.size_diff,
+                              d.count_diff) for d in diff[:30]]
             result.growth_sites = [
                 f'{str(d.traceback).replace(here, "")}: {d.size_diff / 1024:+.1f} KiB '
                 f'({d.count_diff:+d} blocks)' for d in diff[:5] if d.size_diff > 0]

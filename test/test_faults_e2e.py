@@ -93,7 +93,8 @@ class Listener:
             self.executor.spin_once(timeout_sec=0.02)
 
     def set_parameter(self, name: str, value):
-        request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        msg = Parameter(name, value=value).to_parameter_msg()
+        request = SetParameters.Request(parameters=[msg])
         future = self.params.call_async(request)
         self.spin_until(future.done, 10.0, f'set_parameters {name}')
         return future.result().results[0]

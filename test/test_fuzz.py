@@ -23,6 +23,7 @@ What is asserted
   InputError or ConfigError comes out, and what comes out is well-formed.
 """
 
+from dataclasses import replace
 from datetime import datetime
 import os
 from types import SimpleNamespace as NS
@@ -82,11 +83,7 @@ def bundle(tmp_path_factory):
 
 
 def new_detector(bundle, **overrides) -> ContactDetector:
-    settings_ = SETTINGS
-    if overrides:
-        from dataclasses import replace
-        settings_ = replace(SETTINGS, **overrides)
-    return ContactDetector(bundle=bundle, settings=settings_)
+    return ContactDetector(bundle=bundle, settings=replace(SETTINGS, **overrides))
 
 
 def check_block(d: Decisions) -> None:
@@ -200,7 +197,8 @@ def audio_ops(draw):
 @st.composite
 def wrench_ops(draw):
     n = draw(st.integers(0, 60))
-    t_shape = draw(st.sampled_from(['n', 'n', 'n1', 'scalar', 'n+1', 'list', 'none', 'text']))
+    t_shape = draw(st.sampled_from(['n', 'n', 'n1', 'scalar', 'n+1', 'list', 'none', 'text',
+                                    'bigint']))
     f_shape = draw(st.sampled_from([(n, 3), (n, 3), (n, 3), (n, 2), (3,), (n, 3, 1)]))
     fill = draw(st.sampled_from(('noise', 'noise', 'nan', 'inf', 'huge')))
     dtype = draw(st.sampled_from(('float64', 'float64', 'float32', 'int32', 'object')))
@@ -224,7 +222,7 @@ def build_wrench(op, clock: float) -> dict:
         t = rng.permutation(t)
     t_value = {'n': t, 'n1': t[:, None], 'scalar': np.float64(start),
                'n+1': np.append(t, start), 'list': t.tolist(), 'none': None,
-               'text': ['a'] * n}[t_shape]
+               'text': ['a'] * n, 'bigint': [10 ** 400] * max(n, 1)}[t_shape]
     force = make_array(dtype=dtype, shape=f_shape, fill=fill, seed=seed)
     torque = make_array(dtype=dtype, shape=f_shape, fill='noise', seed=seed + 1)
     return dict(t=t_value, force=force, torque=torque)

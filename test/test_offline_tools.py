@@ -269,9 +269,11 @@ def test_params_file_values_take_effect(data, all_rows, tmp_path):
     assert [r['p'] for r in frames] == [r['p'] for r in ref]      # the forest is unchanged
     t = np.array([r['t'] for r in frames])
     warm = t >= t[0] + 1.5
-    # Threshold 0: every frame after the 1.5 s warm-up is contact; the release fires at once.
+    # Threshold 0: every frame after the 1.5 s warm-up is contact; the release fires as soon as
+    # the model's confirmation rule allows.
+    confirm = load_bundle(path=data['model']).decision_rule.confirm_frames
     assert np.array_equal([r['contact'] for r in frames], warm)
-    assert releases_of(rows, name) == [float(t[warm][0])]
+    assert releases_of(rows, name) == [float(t[warm][confirm - 1])]
     assert releases_of(rows, name) != releases_of(all_rows, name)
 
 
@@ -479,8 +481,10 @@ def test_train_with_labels_csv(data, no_truth, tmp_path):
                            '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     assert bundle.training['trials'] == 4
-    # The onset window [onset, onset + 0.1 s) holds about ten 10 ms frames per trial.
-    assert 4 * 8 <= bundle.training['contact_frames'] <= 4 * 12
+    # The label window [onset + start, onset + end) holds one frame per 10 ms per trial.
+    window = bundle.label_window['end_s'] - bundle.label_window['start_s']
+    per_trial = window / 0.010
+    assert 4 * (per_trial - 2) <= bundle.training['contact_frames'] <= 4 * (per_trial + 2)
     # A CSV that misses a bag is refused before any work.
     labels.write_text('\n'.join(lines[:-1]) + '\n')
     assert train_cli.main([str(out), '--labels', str(labels), '--jobs', '1', '--out',

@@ -291,7 +291,7 @@ class ContactDetector:
             stamp = None
             try:
                 stamp = float(np.max(t))
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 pass
             return self.drop(kind='wrench', reason=str(err), stamp=stamp)
         self.latest_wrench_t = self.extractor.ft.last_input_t
