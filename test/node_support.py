@@ -7,7 +7,11 @@ model is the shipped ``models/contact_forest.joblib`` when it exists, otherwise 
 
 from dataclasses import dataclass
 from datetime import datetime
+import os
 from pathlib import Path
+import signal
+import subprocess
+import sys
 from typing import List, Optional
 
 import numpy as np
@@ -121,3 +125,22 @@ def model_path(directory: Path, *, allow_shipped: bool = True) -> Path:
 def uses_shipped(path: Optional[Path]) -> bool:
     """Whether ``path`` is the shipped model."""
     return path is not None and Path(path).resolve() == SHIPPED_MODEL.resolve()
+
+
+def start_process(args, log: Path) -> subprocess.Popen:
+    """Start ``python ARGS`` in the repository with this test run's environment (DDS on lo)."""
+    return subprocess.Popen([sys.executable, *args], cwd=Path(__file__).resolve().parents[1],
+                            env=dict(os.environ), stdout=open(log, 'w'),
+                            stderr=subprocess.STDOUT)
+
+
+def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> int:
+    """SIGINT (as Ctrl-C would), then kill after ``timeout``; return the exit code."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            return proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            return proc.wait()
+    return proc.returncode

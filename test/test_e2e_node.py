@@ -9,11 +9,7 @@ latency budget, and be the only one.
 """
 
 import json
-import os
 from pathlib import Path
-import signal
-import subprocess
-import sys
 import time
 
 import pytest
@@ -30,20 +26,8 @@ def model(tmp_path_factory):
     return node_support.model_path(tmp_path_factory.mktemp('model'))
 
 
-def _start(args, log: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, *args], cwd=HERE.parent, env=dict(os.environ),
-                            stdout=open(log, 'w'), stderr=subprocess.STDOUT)
-
-
-def _stop(proc: subprocess.Popen, timeout: float = 10.0) -> int:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            return proc.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            return proc.wait()
-    return proc.returncode
+_start = node_support.start_process
+_stop = node_support.stop_process
 
 
 def test_release_after_onset_across_processes(model, tmp_path):
