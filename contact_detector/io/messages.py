@@ -246,13 +246,9 @@ def embedded_audio_format(msg: Any, msg_type: str) -> Optional[AudioFormat]:
     if not spec.embedded_info:
         return None
     info = _field(_field(msg, 'audio'), 'info')
-    rate, channels = _int_field(info, 'rate'), _int_field(info, 'channels')
-    if not MIN_SAMPLE_RATE <= rate <= MAX_SAMPLE_RATE:
-        raise InputError(f'AudioStamped info.rate={rate} Hz is outside '
-                         f'[{MIN_SAMPLE_RATE:.0f}, {MAX_SAMPLE_RATE:.0f}]')
-    if channels < 1:
-        raise InputError(f'AudioStamped info.channels={channels} must be >= 1')
-    return AudioFormat(sample_rate=float(rate), channels=channels)
+    return _audio_format(rate=_int_field(info, 'rate'), channels=_int_field(info, 'channels'),
+                         error=InputError, rate_text='AudioStamped info.rate={} Hz',
+                         channels_text='AudioStamped info.channels={}')
 
 
 def check_audio_info(info: Any) -> AudioFormat:
@@ -294,13 +290,9 @@ def check_audio_info(info: Any) -> AudioFormat:
     else:
         raise ConfigError(f'unrecognised audio info message {type(info).__name__}: it has '
                           'neither coding_format (ros-drivers) nor rate/format (mgonzs13)')
-    channels = _int_field(info, 'channels')
-    if not MIN_SAMPLE_RATE <= rate <= MAX_SAMPLE_RATE:
-        raise ConfigError(f'audio_info sample rate {rate} Hz is outside '
-                          f'[{MIN_SAMPLE_RATE:.0f}, {MAX_SAMPLE_RATE:.0f}]')
-    if channels < 1:
-        raise ConfigError(f'audio_info channels={channels} must be >= 1')
-    return AudioFormat(sample_rate=float(rate), channels=channels)
+    return _audio_format(rate=rate, channels=_int_field(info, 'channels'), error=ConfigError,
+                         rate_text='audio_info sample rate {} Hz',
+                         channels_text='audio_info channels={}')
 
 
 def audio_to_samples(msg: Any, *, msg_type: str, channels: int = 1,
@@ -498,3 +490,14 @@ def _to_mono(data: np.ndarray, *, channels: int, channel: Optional[int], scale: 
     if data.dtype.kind == 'f' and scale == 1.0 and offset == 0.0:
         return np.ascontiguousarray(data, dtype=np.float32)
     return ((data.astype(np.float64) - offset) / scale).astype(np.float32)
+
+
+def _audio_format(*, rate: float, channels: int, error: type, rate_text: str,
+                  channels_text: str) -> AudioFormat:
+    """Return the AudioFormat, or raise ``error`` if the rate or channel count is unusable."""
+    if not MIN_SAMPLE_RATE <= rate <= MAX_SAMPLE_RATE:
+        raise error(f'{rate_text.format(rate)} is outside '
+                    f'[{MIN_SAMPLE_RATE:.0f}, {MAX_SAMPLE_RATE:.0f}]')
+    if channels < 1:
+        raise error(f'{channels_text.format(channels)} must be >= 1')
+    return AudioFormat(sample_rate=float(rate), channels=channels)
