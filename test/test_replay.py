@@ -106,6 +106,16 @@ def _stamp_ns(msg) -> int:
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
+def _missing(recorded, got) -> str:
+    """Say which recorded messages (by index) did not arrive, for the assertion message."""
+    seqs = [r.msg.header.stamp.sec * 1_000_000_000 + r.msg.header.stamp.nanosec
+            for r in recorded]
+    arrived = [_stamp_ns(m) for _, m in got]
+    shift = arrived[0] - seqs[0] if arrived else 0
+    lost = [i for i, s in enumerate(seqs) if s + shift not in set(arrived)]
+    return f'{len(got)} of {len(recorded)} arrived; missing indices {lost[:10]}'
+
+
 def test_replay_with_clock_at_4x(bag, listener):
     recorded = list(iter_messages(bag))
     wrench = [m for m in recorded if m.topic == '/wrist_wrench']
@@ -115,7 +125,8 @@ def test_replay_with_clock_at_4x(bag, listener):
     assert result.returncode == 0, result.stdout
     got = listener.got
     # Every message, once, in the recorded order.
-    assert len(got['/wrist_wrench']) == len(wrench) and len(got['/audio']) == len(audio)
+    assert len(got['/wrist_wrench']) == len(wrench), _missing(wrench, got['/wrist_wrench'])
+    assert len(got['/audio']) == len(audio)
     assert [_stamp_ns(m) for _, m in got['/wrist_wrench']] == [
         m.msg.header.stamp.sec * 1_000_000_000 + m.msg.header.stamp.nanosec for m in wrench]
     assert all(np.array_equal(np.asarray(g.data), r.msg.data)
@@ -137,7 +148,8 @@ def test_replay_restamp_moves_stamps_to_now(bag, listener):
     result = listener.run(_replay_command(bag, '--restamp', '--wait-for-subscribers', 15))
     assert result.returncode == 0, result.stdout
     got = listener.got['/wrist_wrench']
-    assert len(got) == len(wrench) and not listener.got['/clock']
+    assert len(got) == len(wrench), _missing(wrench, got)
+    assert not listener.got['/clock']
     original = np.array([m.msg.header.stamp.sec * 1_000_000_000 + m.msg.header.stamp.nanosec
                          for m in wrench])
     stamps = np.array([_stamp_ns(m) for _, m in got])

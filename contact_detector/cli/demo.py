@@ -211,6 +211,7 @@ def run_demo(*, trials: int, seed: int, out: Path, model: Path, figure: Path) ->
             def remember(bag0, wall0):
                 starts.update(bag0=bag0, wall0=wall0)
             player.play(records, on_start=remember)
+            player.flush(timeout_s=2.0)
             time.sleep(0.3)
             wall0 = starts['wall0'] - (starts['bag0'] - trial.start_time)
             with collector.lock:

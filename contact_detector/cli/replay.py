@@ -67,6 +67,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             player.play(records)
             if not args.loop:
                 break
+        if not player.flush(timeout_s=5.0):
+            print('some subscribers did not acknowledge the last messages within 5 s',
+                  flush=True)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ContactDetectorError as err:

@@ -207,6 +207,26 @@ class BagPlayer:
             self.published += 1
         return self.published
 
+    def flush(self, *, timeout_s: float = 5.0) -> bool:
+        """
+        Wait until every subscriber has acknowledged what was published; True if all did.
+
+        Publishing is asynchronous: a process that exits right after its last ``publish`` can
+        take the final messages with it, and the subscriber never sees the end of the bag.
+        Only reliable publishers wait (all of ours are); ``timeout_s`` bounds the wait.
+        """
+        from rclpy.duration import Duration
+
+        publishers = [p for p in self._publishers.values() if p is not None]
+        if self._clock_pub is not None:
+            publishers.append(self._clock_pub)
+        end = time.monotonic() + timeout_s
+        acked = True
+        for publisher in publishers:
+            left = max(0.0, end - time.monotonic())
+            acked = publisher.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and acked
+        return acked
+
     def _restamped(self, record: Recorded, offset_ns: int) -> bytes:
         cls = self._types[record.topic]
         if 'header' not in cls.get_fields_and_field_types():
