@@ -125,7 +125,9 @@ def spectral_centroid_spread(*, spectra: np.ndarray,
     xt = _max_normalised(np.asarray(spectra, dtype=np.float64))
     nu = normalised_bin_frequencies(n_bins=xt.shape[1], window_length=window_length)
     den = xt.sum(axis=1) + EPS
-    centroid = (xt @ nu) / den
+    # einsum, not BLAS ``@``: a row's result must not depend on how many rows come with it
+    # (offline blocks and live single frames give bit-identical features).
+    centroid = np.einsum('ik,k->i', xt, nu) / den
     spread = np.sqrt(np.einsum('ik,ik->i', (nu[None, :] - centroid[:, None]) ** 2, xt) / den)
     return centroid, spread
 

@@ -283,16 +283,15 @@ class NoiseFloor:
         """
         Return the floor after each frame, shape like ``power``.
 
-        Vectorised per block of 256 frames as ``g^k min(F_prev g, min_{j<=k} P_j g^-j)``.
+        One frame at a time, so that the result does not depend on how the frames were grouped
+        into calls (live single frames and offline blocks agree to the bit).
         """
-        out = np.empty_like(power)
-        for lo in range(0, power.shape[0], 256):
-            block = power[lo:lo + 256]
-            k = np.arange(block.shape[0], dtype=np.float64)
-            gk = self.growth ** k
-            running = np.minimum.accumulate(block / gk)
-            out[lo:lo + 256] = np.minimum(gk * running, self._floor * self.growth * gk)
-            self._floor = float(out[lo + block.shape[0] - 1])
+        out = np.empty(power.shape[0])
+        floor, growth = self._floor, self.growth
+        for i, p in enumerate(power.tolist()):
+            floor = min(p, floor * growth)
+            out[i] = floor
+        self._floor = floor
         return out
 
 
@@ -446,7 +445,9 @@ class ForceTorqueStream:
         m = ends.size
         # |F| and |T| windows side by side: one DFT call for both signals.
         windows = self._mag[(ends - n + 1)[:, None] + self._offsets]        # (m, n, 2)
-        frames = windows.transpose(2, 0, 1).reshape(2 * m, n)
+        # Contiguous whatever m is: numpy sums strided rows in another order, and a frame's
+        # features must not depend on how many frames one call computes.
+        frames = np.ascontiguousarray(windows.transpose(2, 0, 1).reshape(2 * m, n))
         spectra = spectral.magnitude_spectrum(frames=frames, window_fn=cfg.ft_window_fn,
                                               detrend=cfg.ft_detrend)
         centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=n)

@@ -1,0 +1,249 @@
+"""A whole recording through the detector in a few array operations, bit-identical to live.
+
+:func:`contact_detector.detection.offline.run_detector` feeds a recording to
+:class:`~contact_detector.detection.detector.ContactDetector` one message at a time, as the node
+does: ~180 us of Python and numpy per 10 ms of sensor data, i.e. ~50x real time. This module
+computes the same :class:`Decisions` for a *clean* recording in blocks:
+
+1. one cheap scalar pass over the messages repeats every check and every piece of state the
+   live path keeps per message (audio time anchor, audio rate check, wrench stamp order and
+   gaps) and gives up (returns None) at anything that would make the live path drop, restart
+   or reset: a refused message, a wrench gap, an audio dropout, a time jump, a rate mismatch;
+2. all audio frames, all F/T feature frames and all forest probabilities are then computed in
+   single calls: the feature functions give every row the same bits whatever the number of
+   rows (``test_blocks.py``; that is why :func:`spectral.spectral_centroid_spread` uses
+   ``einsum`` and not BLAS, and :class:`NoiseFloor` runs frame by frame);
+3. for every audio frame, the message after which the live extractor would emit it (its F/T is
+   there, or the wait timed out) follows from the per-message stamps by ``searchsorted``; that
+   message fixes which F/T feature frame the audio frame gets and the receive time used for
+   the staleness check, as live.
+
+A recording that is not clean goes through the per-message path, so the result is always the
+node's; only the speed differs.
+"""
+
+import math
+from typing import List, Optional
+
+import numpy as np
+
+from contact_detector.detection.detector import (_FLOAT32_MAX, AudioRateCheck, CLIP_LEVEL,
+                                                 ContactDetector)
+from contact_detector.features import spectral
+from contact_detector.features.streaming import frame_ends, NoiseFloor, to_unit_audio
+from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
+
+#: Audio frames per power block (bounds the frame matrix: 4096 x 1536 x 8 B = 50 MB at 48 kHz).
+POWER_BLOCK = 4096
+
+
+def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[dict]:
+    """
+    Decide a clean recording in blocks; None if the per-message path is needed.
+
+    Parameters
+    ----------
+    events : list of Event
+        The recording, in log-time order (:func:`sensor_events`).
+    detector : ContactDetector
+        A fresh detector (nothing pushed yet); it is used up. Anything else (a baseline)
+        returns None.
+
+    Returns
+    -------
+    dict or None
+        ``t, p, contact, valid`` (arrays, one entry per audio frame in emission order),
+        ``releases, events`` (lists of s) and ``counts``, exactly as the per-message path gives
+        them; None when the recording is not clean (see the module docstring).
+
+    """
+    if not isinstance(detector, ContactDetector):
+        return None                         # a baseline: it has its own path
+    ex = detector.extractor
+    if (detector.counts['audio_msgs'] or detector.counts['wrench_msgs'] or ex.pending
+            or ex.audio.latest_time is not None or ex.ft.last_input_t is not None):
+        return None
+    scan = _scan(events, detector=detector)
+    if scan is None:
+        return None
+    (kinds, nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg) = scan
+    framer, fs = ex.audio, ex.audio.sample_rate
+    n_events = kinds.size
+
+    # --- audio: anchors and frames, exactly as AudioFramer.push per chunk -------------------
+    sizes = np.array([c.shape[0] for c in chunks], dtype=np.int64)
+    cum = np.cumsum(sizes)
+    anchors = _anchors(sizes=sizes, stamps=stamps, framer=framer)
+    if anchors is None:
+        return None
+    latest = anchors + (cum - 1) / fs
+    w, hop = framer.frame_length, framer.hop
+    total = int(cum[-1]) if cum.size else 0
+    upper = int(math.floor((total - w + 0.5) / hop)) + 2 if total else 0
+    ends = frame_ends(first=0, count=max(upper, 0), frame_length=w, hop=hop)
+    ends = ends[ends <= total]
+    chunk_of = np.searchsorted(cum, ends, side='left')
+    t = anchors[chunk_of] + (ends - 1) / fs
+    arrival = latest[chunk_of]
+    if not (np.all(np.diff(t) > 0) and np.all(np.diff(latest) >= 0)):
+        return None         # a time anchor that moved back by more than a hop: per message
+    units = [to_unit_audio(c) for c in chunks]
+    clipped = sum(1 for u in units if u.size and float(np.max(np.abs(u))) >= CLIP_LEVEL)
+    samples = np.concatenate(units) if units else np.zeros(0)
+    power = np.empty(ends.size)
+    for lo in range(0, ends.size, POWER_BLOCK):
+        block = ends[lo:lo + POWER_BLOCK]
+        power[lo:lo + block.size] = spectral.audio_power(
+            frames=samples[(block - w)[:, None] + framer._offsets])
+    needs_rel = ex._rel_idx is not None or ex._peak_idx is not None
+    rel = (spectral.power_db_above_floor(power=power, floor=NoiseFloor(
+        config=ex.config).update(power)) if needs_rel else np.zeros_like(power))
+    peak = ex._recent_peak(rel) if ex._peak_idx is not None else rel
+
+    # --- F/T: one push of every sample (no gaps: checked by the scan) -----------------------
+    if wt.size:
+        ft_t, ft_x = ex.ft.push(t=wt, force=wforce, torque=wtorque)
+    else:
+        ft_t, ft_x = np.zeros(0), np.zeros((0, len(ex.ft.columns)))
+    sample_event = np.repeat(wrench_idx, per_msg)
+    ft_event = sample_event[np.searchsorted(wt, ft_t)] if ft_t.size else np.zeros(0, np.intp)
+    ft_count = np.cumsum(np.bincount(ft_event, minlength=n_events)) if n_events else \
+        np.zeros(0, np.int64)
+
+    # --- when would the live extractor emit each frame? -------------------------------------
+    last_ft = np.full(n_events, -np.inf)
+    last_ft[wrench_idx] = wt[np.cumsum(per_msg) - 1]
+    last_ft = np.maximum.accumulate(last_ft)
+    newest_audio = np.full(n_events, -np.inf)
+    newest_audio[audio_idx] = latest
+    newest_audio = np.maximum.accumulate(newest_audio)
+    ready_at = last_ft + ex.ready_margin_s               # frames with t < this are ready
+    timeout_at = newest_audio - ex.max_ft_wait_s         # frames with arrival < this time out
+    created = audio_idx[chunk_of]
+    emitted = np.maximum(np.minimum(np.searchsorted(ready_at, t, side='right'),
+                                    np.searchsorted(timeout_at, arrival, side='right')),
+                         created)
+    at_flush = emitted >= n_events
+
+    # --- the F/T frame each audio frame gets at that moment ---------------------------------
+    available = np.where(at_flush, ft_t.size,
+                         ft_count[np.minimum(emitted, n_events - 1)] if n_events else 0)
+    idx = np.minimum(np.searchsorted(ft_t, t, side='right') - 1, available - 1)
+    oldest_kept = np.maximum(available - ex.history_frames, 0)
+    valid = idx >= oldest_kept
+    valid[valid] &= (t[valid] - ft_t[idx[valid]]) <= ex.max_ft_age_s
+    x = np.zeros((t.size, len(ex.names)))
+    x[:, 0] = power
+    if ex._rel_idx is not None:
+        x[:, ex._rel_idx] = rel
+    if ex._peak_idx is not None:
+        x[:, ex._peak_idx] = peak
+    if valid.any():
+        rows = np.flatnonzero(valid)[:, None]
+        x[rows, ex._ft_dst] = ft_x[idx[valid]][:, ex._ft_col]
+
+    # --- ContactDetector._decide over all frames at once ------------------------------------
+    counts = detector.counts
+    finite = np.all(np.abs(x) <= _FLOAT32_MAX, axis=1)
+    counts['nonfinite_frames'] += int((valid & ~finite).sum())
+    valid &= finite
+    now = np.where(at_flush, np.nan, nows[np.minimum(emitted, n_events - 1)]
+                   if n_events else np.nan)
+    with np.errstate(invalid='ignore'):
+        stale = (now - t) > detector.settings.max_input_delay_s     # NaN (flush): never stale
+    counts['stale_frames'] += int(stale.sum())
+    valid &= ~stale
+    p = np.zeros(t.size)
+    if valid.any():
+        p[valid] = detector.forest.predict_proba(x[valid])
+    warm_until = float(t[0]) + detector.settings.warmup_s if t.size else math.inf
+    contact, releases = detector.logic.step(t=t, p=p, valid=valid, blocked=t < warm_until)
+    counts['audio_msgs'] += int(audio_idx.size)
+    counts['wrench_msgs'] += int(wrench_idx.size)
+    counts['audio_clipped'] += clipped
+    counts['frames'] += int(t.size)
+    counts['invalid_frames'] += int(t.size - valid.sum())
+    counts['events'] = detector.logic.events
+    counts['releases'] = detector.logic.releases
+    return dict(t=t, p=p, contact=contact, valid=valid, releases=releases,
+                events=list(detector.logic.last_events), counts=dict(counts))
+
+
+def _scan(events: List[Event], *, detector: ContactDetector) -> Optional[tuple]:
+    """Split the messages by kind, repeating the live per-message checks; None if not clean."""
+    kinds, nows = [], []
+    audio_idx, chunks, stamps = [], [], []
+    wrench_idx, wt, wforce, wtorque, per_msg = [], [], [], [], []
+    settings = detector.settings
+    rate = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
+        rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
+    gap = detector.extractor.ft.gap_reset_s
+    for event in events:
+        if isinstance(event, AudioEvent):
+            samples, stamp = event.samples, event.stamp
+            if not (isinstance(samples, np.ndarray) and samples.ndim == 1 and samples.size
+                    and samples.dtype in (np.int16, np.float32, np.float64)
+                    and isinstance(stamp, float) and math.isfinite(stamp)):
+                return None
+            if samples.dtype != np.int16 and not np.all(np.isfinite(samples)):
+                return None
+            if rate is not None and rate.update(n=samples.shape[0], stamp=stamp) is not None:
+                return None
+            audio_idx.append(len(kinds))
+            chunks.append(samples)
+            stamps.append(stamp)
+        elif isinstance(event, WrenchEvent):
+            t, force, torque = event.t, event.force, event.torque
+            if not (isinstance(t, np.ndarray) and t.ndim == 1 and t.size
+                    and t.dtype == np.float64 and force.shape == (t.size, 3)
+                    and torque.shape == (t.size, 3) and force.dtype == np.float64
+                    and torque.dtype == np.float64):
+                return None
+            wrench_idx.append(len(kinds))
+            wt.append(t)
+            wforce.append(force)
+            wtorque.append(torque)
+            per_msg.append(t.size)
+        elif isinstance(event, BadEvent):
+            return None
+        else:
+            continue                        # truth: the detector never sees it
+        kinds.append(isinstance(event, AudioEvent))
+        nows.append(event.now)
+    if wt:
+        t = np.concatenate(wt)
+        force, torque = np.concatenate(wforce), np.concatenate(wtorque)
+        steps = np.diff(t)
+        # A repeated or older stamp is dropped live, a longer gap restarts the F/T window,
+        # NaN/Inf is dropped: all for the per-message path.
+        if not (np.all(steps > 0) and np.all(steps <= gap) and np.all(np.isfinite(t))
+                and np.all(np.isfinite(force)) and np.all(np.isfinite(torque))):
+            return None
+    else:
+        t, force, torque = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
+    return (np.array(kinds, dtype=bool), np.array(nows, dtype=np.float64),
+            np.array(audio_idx, dtype=np.intp), chunks, np.array(stamps, dtype=np.float64),
+            np.array(wrench_idx, dtype=np.intp), t, force, torque,
+            np.array(per_msg, dtype=np.intp))
+
+
+def _anchors(*, sizes: np.ndarray, stamps: np.ndarray, framer) -> Optional[np.ndarray]:
+    """Return the time anchor after each chunk (AudioFramer._update_anchor); None on a jump."""
+    out = np.empty(sizes.size)
+    fs, drift = framer.sample_rate, framer.drift
+    anchor = last = None
+    n_total = 0
+    for i, (n, stamp) in enumerate(zip(sizes.tolist(), stamps.tolist())):
+        offset = stamp - (n_total + n - 1) / fs
+        if anchor is None:
+            anchor = offset
+        else:
+            crept = anchor + drift * max(0.0, stamp - last)
+            if offset < crept - framer.backjump_tolerance_s or \
+                    offset > crept + framer.gap_tolerance_s:
+                return None
+            anchor = min(crept, offset)
+        last = stamp
+        n_total += n
+        out[i] = anchor
+    return out
