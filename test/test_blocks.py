@@ -203,3 +203,16 @@ def test_cdr_readers_and_rosbags_give_the_same_run(bundle, tmp_path):
     settings = dict(audio_rate=44100.0)
     _same(run_detector(fast, detector=_detector(bundle, **settings)),
           run_detector(slow, detector=_detector(bundle, **settings), in_blocks=False))
+
+
+def test_partial_recordings(bundle, recordings):
+    events = recordings['16k_sqlite'][0][0]
+    pieces = {'empty': [], 'first 30 messages': events[:30],
+              'wrench only': [e for e in events if isinstance(e, WrenchEvent)],
+              'audio only': [e for e in events if isinstance(e, AudioEvent)]}
+    for name, piece in pieces.items():
+        run = _both(piece, bundle)
+        assert not run.releases, name
+    # Audio without F/T: every frame is emitted after the wait, invalid, never a contact.
+    run = _both(pieces['audio only'], bundle)
+    assert run.t.size > 500 and not run.valid.any()
