@@ -216,3 +216,30 @@ def test_partial_recordings(bundle, recordings):
     # Audio without F/T: every frame is emitted after the wait, invalid, never a contact.
     run = _both(pieces['audio only'], bundle)
     assert run.t.size > 500 and not run.valid.any()
+
+
+def test_training_features_in_blocks_equal_message_by_message(bundle, recordings):
+    from contact_detector.detection.offline import run_features
+    from contact_detector.features.streaming import StreamingFeatureExtractor
+
+    for case in ('16k_sqlite', 'odd_chunks_48k', '1kHz_ft'):
+        recs, settings = recordings[case]
+        for events in recs:
+            def make():
+                return StreamingFeatureExtractor(config=bundle.feature_config,
+                                                 audio_rate=settings['audio_rate'],
+                                                 ft_input_rate=settings['wrench_rate'])
+            fast = run_features(events, extractor=make())
+            slow = run_features(events, extractor=make(), in_blocks=False)
+            for key in ('t', 'x', 'valid'):
+                assert np.array_equal(getattr(fast, key), getattr(slow, key)), (case, key)
+            assert fast.names == slow.names
+    # A refused message is skipped by both (no drop, no hold-off: features only).
+    events = recordings['16k_sqlite'][0][0]
+    damaged = events[:300] + [BadEvent(kind='audio', reason='x', now=events[300].now)] + \
+        events[300:]
+    fast = run_features(damaged, extractor=StreamingFeatureExtractor(
+        config=bundle.feature_config, audio_rate=16000.0))
+    slow = run_features(damaged, extractor=StreamingFeatureExtractor(
+        config=bundle.feature_config, audio_rate=16000.0), in_blocks=False)
+    assert np.array_equal(fast.x, slow.x) and np.array_equal(fast.valid, slow.valid)

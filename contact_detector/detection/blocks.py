@@ -23,6 +23,7 @@ node's; only the speed differs.
 """
 
 import math
+from dataclasses import dataclass
 from typing import List, Optional
 
 import numpy as np
@@ -30,11 +31,36 @@ import numpy as np
 from contact_detector.detection.detector import (_FLOAT32_MAX, AudioRateCheck, CLIP_LEVEL,
                                                  ContactDetector)
 from contact_detector.features import spectral
-from contact_detector.features.streaming import frame_ends, NoiseFloor, to_unit_audio
+from contact_detector.features.streaming import (FeatureFrames, frame_ends, NoiseFloor,
+                                                 StreamingFeatureExtractor, to_unit_audio)
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
 
 #: Audio frames per power block (bounds the frame matrix: 4096 x 1536 x 8 B = 50 MB at 48 kHz).
 POWER_BLOCK = 4096
+
+
+@dataclass
+class BlockFeatures:
+    """
+    Every frame of a recording as the live extractor emits it, and when.
+
+    Attributes
+    ----------
+    frames : FeatureFrames
+        The rows in emission order (= time order), as the per-message path concatenates them.
+    now : np.ndarray, shape (n,)
+        Receive time (s) of the message after which each frame was emitted; NaN for frames
+        emitted by the final flush.
+    audio_msgs, wrench_msgs, clipped : int
+        Messages pushed, and audio chunks at full scale.
+
+    """
+
+    frames: FeatureFrames
+    now: np.ndarray
+    audio_msgs: int
+    wrench_msgs: int
+    clipped: int
 
 
 def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[dict]:
@@ -59,16 +85,51 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
     """
     if not isinstance(detector, ContactDetector):
         return None                         # a baseline: it has its own path
-    ex = detector.extractor
-    if (detector.counts['audio_msgs'] or detector.counts['wrench_msgs'] or ex.pending
-            or ex.audio.latest_time is not None or ex.ft.last_input_t is not None):
+    if detector.counts['audio_msgs'] or detector.counts['wrench_msgs']:
         return None
-    scan = _scan(events, detector=detector)
+    settings = detector.settings
+    rate = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
+        rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
+    got = block_features(events, extractor=detector.extractor, rate_check=rate,
+                         skip_bad=False)
+    if got is None:
+        return None
+    return _decide(got, detector=detector)
+
+
+def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
+                   rate_check: Optional[AudioRateCheck] = None,
+                   skip_bad: bool = True) -> Optional[BlockFeatures]:
+    """
+    Every feature frame of a clean recording, as a fresh ``extractor`` fed per message gives.
+
+    Parameters
+    ----------
+    events : list of Event
+        The recording, in log-time order.
+    extractor : StreamingFeatureExtractor
+        Fresh (nothing pushed yet); it is used up.
+    rate_check : AudioRateCheck or None
+        Give up where this check would refuse audio (the detector's path).
+    skip_bad : bool
+        Skip refused messages, as :func:`run_features` does (True), or give up at the first
+        one, as the detector drops and holds off (False).
+
+    Returns
+    -------
+    BlockFeatures or None
+        None when the recording is not clean (see the module docstring).
+
+    """
+    ex = extractor
+    if ex.pending or ex.audio.latest_time is not None or ex.ft.last_input_t is not None:
+        return None
+    scan = _scan(events, rate=rate_check, gap=ex.ft.gap_reset_s, skip_bad=skip_bad)
     if scan is None:
         return None
-    (kinds, nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg) = scan
+    (nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg) = scan
     framer, fs = ex.audio, ex.audio.sample_rate
-    n_events = kinds.size
+    n_events = nows.size
 
     # --- audio: anchors and frames, exactly as AudioFramer.push per chunk -------------------
     sizes = np.array([c.shape[0] for c in chunks], dtype=np.int64)
@@ -142,13 +203,20 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
         rows = np.flatnonzero(valid)[:, None]
         x[rows, ex._ft_dst] = ft_x[idx[valid]][:, ex._ft_col]
 
-    # --- ContactDetector._decide over all frames at once ------------------------------------
+    now = np.where(at_flush, np.nan, nows[np.minimum(emitted, n_events - 1)]
+                   if n_events else np.nan)
+    return BlockFeatures(frames=FeatureFrames(t=t, x=x, valid=valid, names=ex.names), now=now,
+                         audio_msgs=int(audio_idx.size), wrench_msgs=int(wrench_idx.size),
+                         clipped=clipped)
+
+
+def _decide(got: BlockFeatures, *, detector: ContactDetector) -> dict:
+    """Do what ContactDetector._decide does per message, for all frames at once."""
+    t, x, valid, now = got.frames.t, got.frames.x, got.frames.valid.copy(), got.now
     counts = detector.counts
     finite = np.all(np.abs(x) <= _FLOAT32_MAX, axis=1)
     counts['nonfinite_frames'] += int((valid & ~finite).sum())
     valid &= finite
-    now = np.where(at_flush, np.nan, nows[np.minimum(emitted, n_events - 1)]
-                   if n_events else np.nan)
     with np.errstate(invalid='ignore'):
         stale = (now - t) > detector.settings.max_input_delay_s     # NaN (flush): never stale
     counts['stale_frames'] += int(stale.sum())
@@ -158,9 +226,9 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
         p[valid] = detector.forest.predict_proba(x[valid])
     warm_until = float(t[0]) + detector.settings.warmup_s if t.size else math.inf
     contact, releases = detector.logic.step(t=t, p=p, valid=valid, blocked=t < warm_until)
-    counts['audio_msgs'] += int(audio_idx.size)
-    counts['wrench_msgs'] += int(wrench_idx.size)
-    counts['audio_clipped'] += clipped
+    counts['audio_msgs'] += got.audio_msgs
+    counts['wrench_msgs'] += got.wrench_msgs
+    counts['audio_clipped'] += got.clipped
     counts['frames'] += int(t.size)
     counts['invalid_frames'] += int(t.size - valid.sum())
     counts['events'] = detector.logic.events
@@ -169,15 +237,12 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
                 events=list(detector.logic.last_events), counts=dict(counts))
 
 
-def _scan(events: List[Event], *, detector: ContactDetector) -> Optional[tuple]:
+def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
+          skip_bad: bool) -> Optional[tuple]:
     """Split the messages by kind, repeating the live per-message checks; None if not clean."""
-    kinds, nows = [], []
+    nows = []
     audio_idx, chunks, stamps = [], [], []
     wrench_idx, wt, wforce, wtorque, per_msg = [], [], [], [], []
-    settings = detector.settings
-    rate = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
-        rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
-    gap = detector.extractor.ft.gap_reset_s
     for event in events:
         if isinstance(event, AudioEvent):
             samples, stamp = event.samples, event.stamp
@@ -189,7 +254,7 @@ def _scan(events: List[Event], *, detector: ContactDetector) -> Optional[tuple]:
                 return None
             if rate is not None and rate.update(n=samples.shape[0], stamp=stamp) is not None:
                 return None
-            audio_idx.append(len(kinds))
+            audio_idx.append(len(nows))
             chunks.append(samples)
             stamps.append(stamp)
         elif isinstance(event, WrenchEvent):
@@ -199,16 +264,15 @@ def _scan(events: List[Event], *, detector: ContactDetector) -> Optional[tuple]:
                     and torque.shape == (t.size, 3) and force.dtype == np.float64
                     and torque.dtype == np.float64):
                 return None
-            wrench_idx.append(len(kinds))
+            wrench_idx.append(len(nows))
             wt.append(t)
             wforce.append(force)
             wtorque.append(torque)
             per_msg.append(t.size)
-        elif isinstance(event, BadEvent):
+        elif isinstance(event, BadEvent) and not skip_bad:
             return None
         else:
-            continue                        # truth: the detector never sees it
-        kinds.append(isinstance(event, AudioEvent))
+            continue                        # truth (or a skipped refusal): never pushed
         nows.append(event.now)
     if wt:
         t = np.concatenate(wt)
@@ -221,7 +285,7 @@ def _scan(events: List[Event], *, detector: ContactDetector) -> Optional[tuple]:
             return None
     else:
         t, force, torque = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
-    return (np.array(kinds, dtype=bool), np.array(nows, dtype=np.float64),
+    return (np.array(nows, dtype=np.float64),
             np.array(audio_idx, dtype=np.intp), chunks, np.array(stamps, dtype=np.float64),
             np.array(wrench_idx, dtype=np.intp), t, force, torque,
             np.array(per_msg, dtype=np.intp))

@@ -92,13 +92,21 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
                events=[e for b in blocks for e in b.events], counts=dict(detector.counts))
 
 
-def run_features(events: Iterable[Event], *,
-                 extractor: StreamingFeatureExtractor) -> FeatureFrames:
+def run_features(events: Iterable[Event], *, extractor: StreamingFeatureExtractor,
+                 in_blocks: bool = True) -> FeatureFrames:
     """
     Feed events to a feature extractor exactly as :class:`ContactDetector` does.
 
-    Bad events are skipped (the detector would drop them too).
+    Bad events are skipped (the detector would drop them too). With ``in_blocks`` a clean
+    recording is computed in blocks (the same bits, :mod:`contact_detector.detection.blocks`).
     """
+    if in_blocks:
+        from contact_detector.detection.blocks import block_features
+
+        events = list(events)
+        got = block_features(events, extractor=extractor)
+        if got is not None:
+            return got.frames
     blocks = []
     for event in events:
         if isinstance(event, AudioEvent):
