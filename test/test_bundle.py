@@ -109,7 +109,9 @@ def test_model_card(saved: Path, forest: RandomForestClassifier) -> None:
     assert card['feature_importances']['audio_power'] == pytest.approx(
         forest.feature_importances_[0])
     assert card['feature_config'] == CONFIG.to_dict()
-    assert card['decision_rule'] == {'threshold': 0.6, 'confirm_frames': 2, 'refractory_s': 0.5}
+    assert card['decision_rule'] == {'threshold': 0.6, 'confirm_frames': 2, 'refractory_s': 0.5,
+                                     'average_frames': 1, 'sustain_frames': 0,
+                                     'sustain_threshold': 0.5}
     assert card['versions']['scikit-learn'] == sklearn.__version__
     assert card['created'] == '2026-03-01T12:00:00+00:00'
     assert len(card['forest']['tree_node_counts']) == 4
@@ -304,11 +306,15 @@ def test_decision_rule() -> None:
     assert DecisionRule.from_dict({}) == DecisionRule()
     for bad in ({'threshold': 1.5}, {'threshold': float('nan')}, {'threshold': True},
                 {'confirm_frames': 0}, {'confirm_frames': 1.5}, {'refractory_s': -0.1},
-                {'refractory_s': float('inf')}):
+                {'refractory_s': float('inf')}, {'average_frames': 0}, {'sustain_frames': -1},
+                {'sustain_threshold': 1.2}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)
     with pytest.raises(ConfigError, match='unknown DecisionRule keys'):
         DecisionRule.from_dict({'threshold': 0.5, 'hysteresis': 0.1})
+    # Bundles written before the averaging and slow-path fields load with the plain rule.
+    old = DecisionRule.from_dict({'threshold': 0.7, 'confirm_frames': 2, 'refractory_s': 1.0})
+    assert (old.average_frames, old.sustain_frames) == (1, 0)
 
 
 def test_find_model(tmp_path: Path) -> None:

@@ -19,6 +19,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
+from contact_detector.cli import detect as detect_cli
 from contact_detector.cli import main as cli_main
 from contact_detector.cli import train as train_cli
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
@@ -510,3 +511,29 @@ def test_copy_helper_really_drops_the_truth(no_truth):
     with open_reader(out / names[0]) as reader:
         assert {c.topic for c in reader.connections} == {'/wrist_wrench', '/audio'}
     assert not (out / 'manifest.json').exists()
+
+
+def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
+    model = tmp_path / 'rule.joblib'
+    assert train_cli.main([str(data['bags']), '--no-events', '--jobs', '1', '--trees', '2,4-5',
+                           '--threshold', '0.85', '--confirm-frames', '1',
+                           '--sustain-frames', '10', '--sustain-threshold', '0.4',
+                           '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    table = bundle.metrics['trial']['validation']
+    assert [row['n_estimators'] for row in table] == [2, 4, 5]
+    assert bundle.forest.n_estimators == bundle.metrics['trial']['best_n_estimators']
+    assert bundle.decision_rule.to_dict() == {
+        'threshold': 0.85, 'confirm_frames': 1, 'refractory_s': 1.0, 'average_frames': 1,
+        'sustain_frames': 10, 'sustain_threshold': 0.4}
+    # detect applies the bundle's rule, and the node's parameters override it.
+    params = tmp_path / 'p.yaml'
+    params.write_text('contact_detector:\n  ros__parameters:\n    release:\n'
+                      '      sustain_frames: 0\n      threshold: 0.99\n')
+    settings, _, _, rule = detect_cli.settings_from_params(
+        detect_cli.read_node_params(params), audio_rate=None)
+    assert rule == {'threshold': 0.99, 'sustain_frames': 0}
+    for bad in ('0', 'x', '5-3'):
+        with pytest.raises(SystemExit):
+            train_cli.main([str(data['bags']), '--trees', bad, '--out', str(model)])
+    capsys.readouterr()

@@ -77,6 +77,15 @@ def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
         overrides['confirm_frames'] = int(confirm)
     if refractory is not None and refractory >= 0:
         overrides['refractory_s'] = float(refractory)
+    average = params.get('release.average_frames', 0)
+    sustain = params.get('release.sustain_frames', -1)
+    sustain_threshold = params.get('release.sustain_threshold', -1.0)
+    if average is not None and average > 0:
+        overrides['average_frames'] = int(average)
+    if sustain is not None and sustain >= 0:
+        overrides['sustain_frames'] = int(sustain)
+    if sustain_threshold is not None and sustain_threshold >= 0:
+        overrides['sustain_threshold'] = float(sustain_threshold)
     if overrides:
         rule = overrides
     settings = dict(

@@ -62,6 +62,35 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)
+    parser.add_argument('--average-frames', type=int, default=DEFAULT_RULE.average_frames,
+                        help='compare the mean P(contact) of this many frames with --threshold')
+    parser.add_argument('--sustain-frames', type=int, default=DEFAULT_RULE.sustain_frames,
+                        help='slow path: also contact when the mean P(contact) of this many '
+                             'frames >= --sustain-threshold (0 = off)')
+    parser.add_argument('--sustain-threshold', type=float,
+                        default=DEFAULT_RULE.sustain_threshold)
+
+
+def tree_counts(text: str) -> list:
+    """Parse ``1-10,20,50`` into sorted distinct tree counts (argparse type)."""
+    counts = set()
+    try:
+        for part in text.split(','):
+            low, _, high = part.strip().partition('-')
+            counts.update(range(int(low), int(high or low) + 1))
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'not a list of tree counts: {text!r}') from err
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f'tree counts must be >= 1: {text!r}')
+    return sorted(counts)
+
+
+def rule_from_args(args: argparse.Namespace) -> DecisionRule:
+    """Build the DecisionRule from parsed options."""
+    return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
+                        refractory_s=args.refractory, average_frames=args.average_frames,
+                        sustain_frames=args.sustain_frames,
+                        sustain_threshold=args.sustain_threshold)
 
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:
@@ -171,6 +200,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--format', choices=('joblib', 'skops'), default='joblib')
     parser.add_argument('--jobs', type=int, default=1, help='parallel workers')
     parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
+                        help='candidate n_estimators, chosen by validation ROC AUC (default '
+                             "1-10, the paper's; e.g. 1-10,20,50 or 50)")
     parser.add_argument('--audio-rate', type=float, default=16000.0)
     parser.add_argument('--wrench-rate', type=float, default=100.0)
     parser.add_argument('--wrench-topic', default='/wrist_wrench')
@@ -189,8 +221,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 def _train(args: argparse.Namespace) -> int:
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
-    rule = DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
-                        refractory_s=args.refractory)
+    rule = rule_from_args(args)
     spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic)
     bags = find_bags(args.bags)
     manifest = conditions_of(bags)
@@ -216,10 +247,10 @@ def _train(args: argparse.Namespace) -> int:
     names = [t.name for t in trials]
     print(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
     results = {}
-    with tqdm(total=2 * 11, desc='forests', unit='step') as bar:
+    with tqdm(total=2 * (len(args.trees) + 1), desc='forests', unit='step') as bar:
         for kind in ('sample', 'trial'):
             results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
-                                      seed=args.seed, jobs=args.jobs,
+                                      seed=args.seed, jobs=args.jobs, n_range=args.trees,
                                       progress=lambda _msg: bar.update(1))
     quoted = results['trial']
     metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,

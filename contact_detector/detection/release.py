@@ -3,6 +3,7 @@
 Pure state machine, no ROS, no clock: frame times are passed in.
 """
 
+from collections import deque
 import math
 from typing import Optional
 
@@ -15,15 +16,22 @@ class ReleaseLogic:
     """
     Turn per-frame probabilities into contact decisions and release events.
 
-    A frame is *contact* when it is valid, not blocked and ``p >= rule.threshold``. A contact
-    *event* starts when ``rule.confirm_frames`` consecutive frames are contact and at least
-    ``rule.refractory_s`` have passed since the previous event. An event releases only while
-    armed, and a release disarms: at most one release per arming.
+    A frame is *contact* when it is valid, not blocked and either
+
+    - the mean P(contact) of the last ``rule.average_frames`` frames is ``>= rule.threshold``
+      (with the default ``average_frames=1``: ``p >= threshold``), or
+    - ``rule.sustain_frames > 0`` and the mean P(contact) of the last ``rule.sustain_frames``
+      frames is ``>= rule.sustain_threshold`` (a slower path for quiet, sustained contacts).
+
+    Both means need that many consecutive valid, unblocked frames: an invalid or blocked frame
+    empties the history. A contact *event* starts when ``rule.confirm_frames`` consecutive
+    frames are contact and at least ``rule.refractory_s`` have passed since the previous event.
+    An event releases only while armed, and a release disarms: at most one release per arming.
 
     Parameters
     ----------
     rule : DecisionRule
-        Threshold, confirmation frames and refractory period.
+        Thresholds, averaging windows, confirmation frames and refractory period.
     armed : bool
         Whether a release may fire before the first :meth:`arm` call.
 
@@ -35,16 +43,37 @@ class ReleaseLogic:
         self.events = 0
         self.releases = 0
         self.last_events: list = []
+        self._recent: deque = deque()
         self.reset()
 
     def reset(self) -> None:
-        """Forget the confirmation run and the last event (arming is kept)."""
+        """Forget the confirmation run, the probability history and the last event."""
         self._run = 0
         self._last_event_t = -math.inf
+        self._recent.clear()
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
         self.armed = bool(armed)
+
+    def _is_contact(self, p: float) -> bool:
+        """Push one valid frame's probability; return whether the frame is contact."""
+        rule = self.rule
+        recent = self._recent
+        recent.append(p)
+        while len(recent) > max(rule.average_frames, rule.sustain_frames):
+            recent.popleft()
+        n = len(recent)
+        if rule.average_frames == 1:
+            if p >= rule.threshold:
+                return True
+        elif n >= rule.average_frames and (
+                sum(list(recent)[n - rule.average_frames:]) / rule.average_frames
+                >= rule.threshold):
+            return True
+        return (rule.sustain_frames > 0 and n >= rule.sustain_frames
+                and sum(list(recent)[n - rule.sustain_frames:]) / rule.sustain_frames
+                >= rule.sustain_threshold)
 
     def step(self, *, t: np.ndarray, p: np.ndarray, valid: np.ndarray,
              blocked: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:
@@ -75,11 +104,17 @@ class ReleaseLogic:
         ok = np.asarray(valid, dtype=bool)
         if blocked is not None:
             ok = ok & ~np.asarray(blocked, dtype=bool)
-        contact = ok & (np.asarray(p) >= self.rule.threshold)
+        p = np.asarray(p)
+        contact = np.zeros(ok.shape[0], dtype=bool)
         releases = []
         self.last_events = []
         need = self.rule.confirm_frames
         for i in range(contact.shape[0]):
+            if not ok[i]:
+                self._recent.clear()
+                self._run = 0
+                continue
+            contact[i] = self._is_contact(float(p[i]))
             if not contact[i]:
                 self._run = 0
                 continue

@@ -90,20 +90,26 @@ class DecisionRule:
     threshold: float = 0.5
     confirm_frames: int = 1
     refractory_s: float = 1.0
+    average_frames: int = 1
+    sustain_frames: int = 0
+    sustain_threshold: float = 0.5
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
-        for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf)):
+        for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf),
+                                ('sustain_threshold', 0.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
                 raise ConfigError(f'DecisionRule.{name} must be a finite number in '
                                   f'[{low}, {high}], got {value!r}')
             object.__setattr__(self, name, float(value))
-        value = self.confirm_frames
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ConfigError(f'DecisionRule.confirm_frames must be an int >= 1, got {value!r}')
-        object.__setattr__(self, 'confirm_frames', int(value))
+        for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < low:
+                raise ConfigError(f'DecisionRule.{name} must be an int >= {low}, got {value!r}')
+            object.__setattr__(self, name, int(value))
 
     def to_dict(self) -> dict:
         """Plain-JSON form, stored in bundles and cards."""

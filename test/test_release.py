@@ -1,0 +1,84 @@
+"""The release rule: per-frame threshold, averaged threshold, and the slow path."""
+
+import numpy as np
+
+from contact_detector.detection.release import ReleaseLogic
+from contact_detector.model.bundle import DecisionRule
+
+HOP = 0.01
+
+
+def _run(rule, p, *, valid=None, pieces=None, armed=True):
+    """Feed ``p`` (one frame per 10 ms) in one call, or cut at the indices in ``pieces``."""
+    p = np.asarray(p, dtype=float)
+    t = np.arange(p.size) * HOP
+    valid = np.ones(p.size, bool) if valid is None else np.asarray(valid)
+    logic = ReleaseLogic(rule=rule, armed=armed)
+    cuts = [0, *(pieces or []), p.size]
+    contact, releases, events = [], [], []
+    for a, b in zip(cuts, cuts[1:]):
+        c, r = logic.step(t=t[a:b], p=p[a:b], valid=valid[a:b])
+        contact.append(c)
+        releases += r
+        events += logic.last_events
+    return np.concatenate(contact), releases, events
+
+
+def test_default_rule_is_the_plain_threshold():
+    rng = np.random.default_rng(0)
+    p = rng.uniform(0, 1, 500)
+    valid = rng.uniform(0, 1, 500) > 0.1
+    contact, _, _ = _run(DecisionRule(threshold=0.7), p, valid=valid)
+    assert np.array_equal(contact, valid & (p >= 0.7))
+
+
+def test_average_of_frames():
+    rule = DecisionRule(threshold=0.7, average_frames=2)
+    # One frame at 0.9 after 0.4: mean 0.65, not contact; the next 0.6 makes mean 0.75.
+    contact, releases, _ = _run(rule, [0.4, 0.9, 0.6, 0.1])
+    assert contact.tolist() == [False, False, True, False]
+    assert releases == [2 * HOP]
+    # The first frame after an invalid one has no history: no contact however high.
+    contact, _, _ = _run(rule, [0.9, 0.9, 0.9, 0.9], valid=[True, True, False, True])
+    assert contact.tolist() == [False, True, False, False]
+
+
+def test_slow_path_catches_a_quiet_sustained_contact():
+    rule = DecisionRule(threshold=0.85, sustain_frames=10, sustain_threshold=0.4)
+    quiet = [0.1] * 5 + [0.45] * 12 + [0.1] * 5
+    contact, releases, _ = _run(rule, quiet)
+    # The mean of the last ten frames reaches 0.4 with nine of them at 0.45 (index 13).
+    assert np.flatnonzero(contact)[0] == 13 and releases == [13 * HOP]
+    # Without the slow path the fast threshold never fires.
+    assert not _run(DecisionRule(threshold=0.85), quiet)[0].any()
+    # A single loud frame still fires at once through the fast path.
+    contact, releases, _ = _run(rule, [0.1] * 5 + [0.9] + [0.1] * 5)
+    assert releases == [5 * HOP]
+
+
+def test_same_decisions_however_the_frames_are_grouped():
+    rng = np.random.default_rng(1)
+    level = np.repeat(rng.choice([0.1, 0.55, 0.8], 40), 20)          # 40 plateaus of 0.2 s
+    p = np.clip(level + rng.normal(0, 0.15, 800), 0, 1)
+    valid = rng.uniform(0, 1, 800) > 0.05
+    for rule in (DecisionRule(threshold=0.7, confirm_frames=2, refractory_s=0.5),
+                 DecisionRule(threshold=0.8, average_frames=3, refractory_s=0.2),
+                 DecisionRule(threshold=0.85, sustain_frames=10, sustain_threshold=0.5,
+                              refractory_s=0.3)):
+        whole = _run(rule, p, valid=valid, armed=False)
+        cuts = sorted(set(rng.integers(1, 799, 60).tolist()))
+        pieces = _run(rule, p, valid=valid, pieces=cuts, armed=False)
+        one_by_one = _run(rule, p, valid=valid, pieces=list(range(1, 800)), armed=False)
+        for other in (pieces, one_by_one):
+            assert np.array_equal(whole[0], other[0]) and whole[2] == other[2]
+        assert len(whole[2]) > 1          # several events, none released (disarmed)
+        assert whole[1] == []
+
+
+def test_one_release_per_arming_and_refractory():
+    rule = DecisionRule(threshold=0.5, refractory_s=0.05)
+    p = [0.9, 0.1, 0.9, 0.1, 0.1, 0.1, 0.1, 0.1, 0.9]
+    contact, releases, events = _run(rule, p)
+    assert releases == [0.0]
+    # The second high frame is within the refractory period: no event; the third is not.
+    assert events == [0.0, 8 * HOP]
