@@ -16,6 +16,7 @@ the simulated trial of test/test_e2e_node.py), medians over the repeats:
    of that frame's ``contact`` (DDS both ways, executor wake-ups, any wait for F/T).
 
     python benchmarks/bench_node.py [--repeats 3] [--model PATH] [--executor single_threaded]
+                                    [--gap-ms 4 --replay-only]
 
 The shipped model is used if it exists (else a small test model is trained first). On a
 machine shared with other work the latency tails measure the scheduler as much as the node:
@@ -156,11 +157,13 @@ def _pair(runs, key) -> str:
     return f'{p50:.3f} / {p99:.3f}'
 
 
-def replay(*, model: str, audio_rate: int, ft_rate: float) -> dict:
+def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0) -> dict:
     """
     Call the node's callbacks directly with real messages of a trial (no DDS, no executor).
 
-    Measures the node's own work: adapters, detector, publishing (no subscriber).
+    Measures the node's own work: adapters, detector, publishing (no subscriber). With
+    ``gap_s`` > 0 the process sleeps that long before each callback (outside the measured
+    CPU time), as a live node does between messages: the callbacks then start with cold caches.
     """
     import rclpy
     from rclpy.context import Context
@@ -194,13 +197,22 @@ def replay(*, model: str, audio_rate: int, ft_rate: float) -> dict:
     gc.collect()
     gc.freeze()
     cpu_per_call = {'audio': [], 'wrench': []}
+    gap_cpu = 0.0
+    if gap_s:       # the CPU time of the sleep call itself, not part of the node's work
+        t0 = time.thread_time()
+        for _ in range(20):
+            time.sleep(gap_s)
+        gap_cpu = (time.thread_time() - t0) / 20
     start = time.thread_time()
     for kind, msg, receive_time in messages:
         clock.set_ros_time_override(receive_time)      # as /clock would: the log time
+        if gap_s:
+            time.sleep(gap_s)
         before = time.thread_time()
         (node._on_audio if kind == 'audio' else node._on_wrench)(msg)
         cpu_per_call[kind].append(time.thread_time() - before)
-    cpu = (time.thread_time() - start) / (trial.end_time - trial.start_time)
+    cpu = ((time.thread_time() - start - gap_cpu * len(messages))
+           / (trial.end_time - trial.start_time))
     counts = node.detector_counts()
     if counts['audio_dropped'] or counts['wrench_dropped'] or counts['frames'] < 800:
         raise RuntimeError(f'replay went wrong: {counts}')
@@ -224,6 +236,10 @@ def main() -> None:
     parser.add_argument('--out', default='')
     parser.add_argument('--executor', default='hot_path',
                         choices=('hot_path', 'single_threaded'))
+    parser.add_argument('--gap-ms', type=float, default=0.0,
+                        help='replay: sleep this long before each callback (cold caches, as '
+                        'in a live node); default 0 (back to back)')
+    parser.add_argument('--replay-only', action='store_true', help='skip the live runs')
     args = parser.parse_args()
     if args.cmd == '_serve':
         serve(args)
@@ -239,18 +255,21 @@ def main() -> None:
           f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n')
 
     print('In-process replay: callbacks called with real messages, no DDS (the work of the '
-          'node itself)\n')
+          f'node itself), {args.gap_ms:g} ms sleep before each callback\n')
     print('| audio | F/T | node CPU, % of one core | audio callback p50 / p99 (ms) '
           '| wrench callback p50 / p99 (ms) | CPU time per audio / wrench callback, '
           'p50 / p99 (ms) |')
     print('|---|---|---|---|---|---|')
     for audio_rate, ft_rate in CONFIGS:
-        runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate)
+        runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate,
+                       gap_s=args.gap_ms * 1e-3)
                 for _ in range(args.repeats)]
         cpu = statistics.median(100 * r['cpu'] for r in runs)
         print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} '
               f'| {_pair(runs, "audio")} | {_pair(runs, "wrench")} '
               f'| {_pair(runs, "audio_cpu")}; {_pair(runs, "wrench_cpu")} |', flush=True)
+    if args.replay_only:
+        return
 
     print(f'\nLive: publisher, node ({args.executor} executor) and listener processes on '
           'loopback DDS, one simulated trial (~9 s) at the real rate\n')

@@ -14,7 +14,8 @@ the executor, Fast DDS's receive and event threads) over wall time is measured i
 ``waitset``         one rclpy ``WaitSet`` reused across iterations, one take per ready sub
 ``waitset_raw``     the same, ``raw=True``
 ``waitset_drain``   ``waitset_raw``, and every ready subscription taken until it is empty
-``events``          ``rclpy.experimental.EventsExecutor`` (C++ executor), empty callbacks
+``events``          ``rclpy.experimental.EventsExecutor`` (C++ executor, ``spin_once``
+                    loop), empty callbacks
 ``events_raw``      the same, ``raw=True``
 ``raw_shm``         ``waitset_raw`` with ``FASTDDS_BUILTIN_TRANSPORTS=SHM`` (subscriber)
 ``raw_udp``         ``waitset_raw`` with ``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` (subscriber)
@@ -165,8 +166,9 @@ def subscribe(args: argparse.Namespace) -> None:
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        executor.spin()
-        return
+        # Its spin() delivered no message here (rclpy 7.1.6 wheel), spin_once does.
+        while True:
+            executor.spin_once(timeout_sec=1.0)
     # Hand-made loops: enter the handles once (they stay valid until os._exit).
     handles = [sub.handle for sub in subs]
     for handle in handles:

@@ -8,6 +8,7 @@ for every run-time update; errors name the parameter. ``params/contact_detector.
 documents the same table.
 """
 
+import dataclasses
 from dataclasses import dataclass
 import math
 from typing import Any, Dict, Mapping, Optional, Sequence
@@ -121,6 +122,14 @@ PARAMS: Sequence[ParamSpec] = (
               'the decision rule of the model.', 0, 1000, read_only=False),
     ParamSpec('release.refractory_s', -1.0, 'Minimum time between contact events, s; negative '
               '= the decision rule of the model.', -1.0, 3600.0, read_only=False),
+    ParamSpec('release.average_frames', 0, 'Compare the mean P(contact) of this many frames '
+              'with the threshold; 0 = the decision rule of the model.', 0, 1000,
+              read_only=False),
+    ParamSpec('release.sustain_frames', -1, 'Slow path: a frame is also contact when the mean '
+              'P(contact) of this many frames >= release.sustain_threshold (0 = off); negative '
+              '= the decision rule of the model.', -1, 1000, read_only=False),
+    ParamSpec('release.sustain_threshold', -1.0, 'Threshold of the slow path; negative = the '
+              'decision rule of the model.', -1.0, 1.0, read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',
@@ -178,6 +187,9 @@ class NodeConfig:
     release_threshold: Optional[float]
     release_confirm_frames: Optional[int]
     release_refractory_s: Optional[float]
+    release_average_frames: Optional[int]
+    release_sustain_frames: Optional[int]
+    release_sustain_threshold: Optional[float]
     gripper_enabled: bool
     gripper_topic: str
     gripper_joint: str
@@ -190,13 +202,14 @@ class NodeConfig:
 
     def rule(self, base: DecisionRule) -> DecisionRule:
         """Return ``base`` (the model's rule) with the parameters that are set overriding it."""
-        return DecisionRule(
-            threshold=base.threshold if self.release_threshold is None
-            else self.release_threshold,
-            confirm_frames=base.confirm_frames if self.release_confirm_frames is None
-            else self.release_confirm_frames,
-            refractory_s=base.refractory_s if self.release_refractory_s is None
-            else self.release_refractory_s)
+        overrides = {name: value for name, value in (
+            ('threshold', self.release_threshold),
+            ('confirm_frames', self.release_confirm_frames),
+            ('refractory_s', self.release_refractory_s),
+            ('average_frames', self.release_average_frames),
+            ('sustain_frames', self.release_sustain_frames),
+            ('sustain_threshold', self.release_sustain_threshold)) if value is not None}
+        return dataclasses.replace(base, **overrides)
 
 
 def _check(name: str, value: Any) -> Any:
@@ -266,6 +279,11 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         release_threshold=None if threshold < 0 else threshold,
         release_confirm_frames=None if confirm <= 0 else confirm,
         release_refractory_s=None if refractory < 0 else refractory,
+        release_average_frames=v['release.average_frames'] or None,
+        release_sustain_frames=(None if v['release.sustain_frames'] < 0
+                                else v['release.sustain_frames']),
+        release_sustain_threshold=(None if v['release.sustain_threshold'] < 0
+                                   else v['release.sustain_threshold']),
         gripper_enabled=v['gripper.enabled'], gripper_topic=v['gripper.topic'].strip(),
         gripper_joint=v['gripper.joint'].strip(), gripper_position=v['gripper.position'],
         gripper_duration_s=v['gripper.duration_s'], executor_type=v['executor.type'],
