@@ -143,6 +143,8 @@ def test_blocks_equal_with_other_rules_and_settings(bundle, recordings):
     rule = replace(bundle.decision_rule, threshold=0.3, confirm_frames=1, refractory_s=0.2)
     for events in recs:
         _both(events, bundle, rule=rule, **settings)
+        _both(events, bundle, rule=replace(rule, threshold=0.85, average_frames=2,
+                                           sustain_frames=10, sustain_threshold=0.3), **settings)
         _both(events, bundle, max_input_delay_s=0.005, **settings)     # log times make stale
         _both(events, bundle, max_ft_wait_s=0.0, armed_on_start=False, **settings)
 

@@ -335,6 +335,19 @@ def test_parameters_at_run_time(harness_factory):
     assert node.detector.settings.max_input_delay_s == 0.25
     assert set_('diagnostics.period_s', 2.0).successful
     assert node.get_parameter('release.confirm_frames').value == 3
+    # The averaged threshold and the slow path, on top of the model's rule and back.
+    assert not set_('release.sustain_threshold', 1.5).successful
+    assert set_('release.sustain_frames', 10).successful
+    assert set_('release.sustain_threshold', 0.4).successful
+    assert set_('release.average_frames', 2).successful
+    rule = node.detector.rule
+    assert (rule.sustain_frames, rule.sustain_threshold, rule.average_frames) == (10, 0.4, 2)
+    assert node.detector.logic.rule == rule and rule.confirm_frames == 3
+    assert 'sustain_frames=10' in rule.describe()
+    assert set_('release.sustain_frames', -1).successful
+    assert set_('release.average_frames', 0).successful
+    assert (node.detector.rule.sustain_frames, node.detector.rule.average_frames) == (
+        base.sustain_frames, base.average_frames)
 
 
 def test_stream_rate_change_rebuilds_the_detector(harness_factory, trial):

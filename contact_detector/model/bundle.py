@@ -111,6 +111,17 @@ class DecisionRule:
                 raise ConfigError(f'DecisionRule.{name} must be an int >= {low}, got {value!r}')
             object.__setattr__(self, name, int(value))
 
+    def describe(self) -> str:
+        """Return the rule as one line for logs and diagnostics."""
+        text = (f'threshold={self.threshold:.3f} confirm_frames={self.confirm_frames} '
+                f'refractory_s={self.refractory_s:.3f}')
+        if self.average_frames > 1:
+            text += f' average_frames={self.average_frames}'
+        if self.sustain_frames > 0:
+            text += (f' sustain_frames={self.sustain_frames} '
+                     f'sustain_threshold={self.sustain_threshold:.3f}')
+        return text
+
     def to_dict(self) -> dict:
         """Plain-JSON form, stored in bundles and cards."""
         return dataclasses.asdict(self)

@@ -251,8 +251,7 @@ class ContactDetectorNode(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
         rule = self.detector.rule
         self.get_logger().info(
-            f'model {bundle.model_id} ({self.model_path}); rule threshold={rule.threshold:.3f} '
-            f'confirm_frames={rule.confirm_frames} refractory_s={rule.refractory_s:.2f}; '
+            f'model {bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
             f'audio {cfg.audio_msg_type} {self._format_text()}; wrench {cfg.wrench_rate:g} Hz; '
             f'release {"armed" if self.detector.armed else "disarmed"}')
 
@@ -583,8 +582,7 @@ class ContactDetectorNode(Node):
         values.update({
             'model_id': self.bundle.model_id,
             'model_path': self.model_path,
-            'decision_rule': f'threshold={rule.threshold:.3f} confirm_frames='
-                             f'{rule.confirm_frames} refractory_s={rule.refractory_s:.3f}',
+            'decision_rule': rule.describe(),
             'armed': str(det.armed),
             'audio_msg_type': cfg.audio_msg_type,
             'audio_format': self._format_text(),
