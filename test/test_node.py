@@ -303,7 +303,8 @@ def test_params_file_documents_every_parameter(model):
                                   '-p', f'model.path:={model}', '-p', 'release.threshold:=0.7'])
     try:
         node = ContactDetectorNode(context=ctx)
-        assert node.config.release_threshold == 0.7 and node.detector.rule.threshold == 0.7
+        assert node.config.release_overrides == {'threshold': 0.7}
+        assert node.detector.rule.threshold == 0.7
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=ctx)

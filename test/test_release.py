@@ -1,8 +1,10 @@
 """The release rule: per-frame threshold, averaged threshold, and the slow path."""
 
 import numpy as np
+import pytest
 
-from contact_detector.detection.release import ReleaseLogic
+from contact_detector.detection.release import ReleaseLogic, rule_overrides
+from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import DecisionRule
 
 HOP = 0.01
@@ -82,3 +84,16 @@ def test_one_release_per_arming_and_refractory():
     assert releases == [0.0]
     # The second high frame is within the refractory period: no event; the third is not.
     assert events == [0.0, 8 * HOP]
+
+
+def test_node_parameters_to_rule_overrides():
+    # The defaults of params/contact_detector.yaml leave the model's rule alone ...
+    unset = {'release.threshold': -1.0, 'release.confirm_frames': 0,
+             'release.refractory_s': -1.0, 'release.average_frames': 0,
+             'release.sustain_frames': -1, 'release.sustain_threshold': -1.0}
+    assert rule_overrides(unset) == {} and rule_overrides({}) == {}
+    # ... and 0 turns the slow path off, while 0 confirm frames means "the model's".
+    assert rule_overrides({**unset, 'release.sustain_frames': 0, 'release.threshold': 0.9}) == {
+        'sustain_frames': 0, 'threshold': 0.9}
+    with pytest.raises(ConfigError, match='release.threshold'):
+        rule_overrides({'release.threshold': 'high'})

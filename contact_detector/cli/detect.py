@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import Run, run_detector
+from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError, ContactDetectorError
 from contact_detector.io.bags import find_bags
 from contact_detector.io.messages import normalise_msg_type
@@ -66,28 +67,7 @@ def read_node_params(path: Path) -> dict:
 
 def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
     """Map node parameters onto (DetectorSettings, StreamSpec fields, model path, rule)."""
-    rule = None
-    threshold = params.get('release.threshold', -1.0)
-    confirm = params.get('release.confirm_frames', 0)
-    refractory = params.get('release.refractory_s', -1.0)
-    overrides = {}
-    if threshold is not None and threshold >= 0:
-        overrides['threshold'] = float(threshold)
-    if confirm is not None and confirm > 0:
-        overrides['confirm_frames'] = int(confirm)
-    if refractory is not None and refractory >= 0:
-        overrides['refractory_s'] = float(refractory)
-    average = params.get('release.average_frames', 0)
-    sustain = params.get('release.sustain_frames', -1)
-    sustain_threshold = params.get('release.sustain_threshold', -1.0)
-    if average is not None and average > 0:
-        overrides['average_frames'] = int(average)
-    if sustain is not None and sustain >= 0:
-        overrides['sustain_frames'] = int(sustain)
-    if sustain_threshold is not None and sustain_threshold >= 0:
-        overrides['sustain_threshold'] = float(sustain_threshold)
-    if overrides:
-        rule = overrides
+    rule = rule_overrides(params) or None
     settings = dict(
         audio_rate=float(audio_rate or params.get('audio.sample_rate', 16000)),
         wrench_rate=float(params.get('wrench.rate', 100.0)),

@@ -5,11 +5,55 @@ Pure state machine, no ROS, no clock: frame times are passed in.
 
 from collections import deque
 import math
-from typing import Optional
+from typing import Any, Dict, Mapping, Optional
 
 import numpy as np
 
+from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import DecisionRule
+
+#: Node parameter -> (DecisionRule field, smallest value that overrides the model's rule).
+#: Below it (negative, or 0 for the frame counts that must be >= 1) the model's field applies.
+RULE_PARAMETERS = {
+    'release.threshold': ('threshold', 0.0),
+    'release.confirm_frames': ('confirm_frames', 1),
+    'release.refractory_s': ('refractory_s', 0.0),
+    'release.average_frames': ('average_frames', 1),
+    'release.sustain_frames': ('sustain_frames', 0),
+    'release.sustain_threshold': ('sustain_threshold', 0.0),
+}
+
+
+def rule_overrides(params: Mapping[str, Any]) -> Dict[str, Any]:
+    """
+    Return the DecisionRule fields that node parameters set (the node and ``detect`` share it).
+
+    Parameters
+    ----------
+    params : mapping
+        Flat node parameters (``'release.threshold'`` -> value); missing names are unset.
+
+    Returns
+    -------
+    dict
+        Field name -> value, for ``dataclasses.replace(model_rule, **overrides)``.
+
+    Raises
+    ------
+    ConfigError
+        A value that is not a number.
+
+    """
+    out = {}
+    for name, (field, lowest) in RULE_PARAMETERS.items():
+        value = params.get(name)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f'parameter {name} must be a number, got {value!r}')
+        if value >= lowest:
+            out[field] = value
+    return out
 
 
 class ReleaseLogic:

@@ -17,6 +17,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 
+from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, MAX_SAMPLE_RATE, MIN_SAMPLE_RATE,
                                           normalise_msg_type)
@@ -162,7 +163,8 @@ class NodeConfig:
     The node's parameters, validated (see :data:`PARAMS` for meanings and units).
 
     ``audio_channel`` is None for "mix all channels"; ``max_ft_age_s`` None for the core's
-    default; ``release_*`` are None where the model bundle's rule applies.
+    default; ``release_overrides`` holds the decision-rule fields that parameters set (the model
+    bundle's rule applies to the others).
     """
 
     model_path: str
@@ -184,12 +186,7 @@ class NodeConfig:
     warmup_s: float
     corrupt_holdoff_s: float
     release_armed_on_start: bool
-    release_threshold: Optional[float]
-    release_confirm_frames: Optional[int]
-    release_refractory_s: Optional[float]
-    release_average_frames: Optional[int]
-    release_sustain_frames: Optional[int]
-    release_sustain_threshold: Optional[float]
+    release_overrides: Mapping[str, Any]
     gripper_enabled: bool
     gripper_topic: str
     gripper_joint: str
@@ -202,14 +199,7 @@ class NodeConfig:
 
     def rule(self, base: DecisionRule) -> DecisionRule:
         """Return ``base`` (the model's rule) with the parameters that are set overriding it."""
-        overrides = {name: value for name, value in (
-            ('threshold', self.release_threshold),
-            ('confirm_frames', self.release_confirm_frames),
-            ('refractory_s', self.release_refractory_s),
-            ('average_frames', self.release_average_frames),
-            ('sustain_frames', self.release_sustain_frames),
-            ('sustain_threshold', self.release_sustain_threshold)) if value is not None}
-        return dataclasses.replace(base, **overrides)
+        return dataclasses.replace(base, **self.release_overrides)
 
 
 def _check(name: str, value: Any) -> Any:
@@ -262,8 +252,6 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         raise ConfigError('parameter gripper.topic must not be empty when gripper.enabled')
     if not v['gripper.joint'].strip():
         raise ConfigError('parameter gripper.joint must not be empty')
-    threshold, confirm, refractory = (v['release.threshold'], v['release.confirm_frames'],
-                                      v['release.refractory_s'])
     return NodeConfig(
         model_path=v['model.path'], audio_msg_type=msg_type,
         audio_sample_rate=v['audio.sample_rate'], audio_channels=v['audio.channels'],
@@ -276,14 +264,7 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         max_future_s=v['max_future_s'], warmup_s=v['warmup_s'],
         corrupt_holdoff_s=v['corrupt_holdoff_s'],
         release_armed_on_start=v['release.armed_on_start'],
-        release_threshold=None if threshold < 0 else threshold,
-        release_confirm_frames=None if confirm <= 0 else confirm,
-        release_refractory_s=None if refractory < 0 else refractory,
-        release_average_frames=v['release.average_frames'] or None,
-        release_sustain_frames=(None if v['release.sustain_frames'] < 0
-                                else v['release.sustain_frames']),
-        release_sustain_threshold=(None if v['release.sustain_threshold'] < 0
-                                   else v['release.sustain_threshold']),
+        release_overrides=rule_overrides(v),
         gripper_enabled=v['gripper.enabled'], gripper_topic=v['gripper.topic'].strip(),
         gripper_joint=v['gripper.joint'].strip(), gripper_position=v['gripper.position'],
         gripper_duration_s=v['gripper.duration_s'], executor_type=v['executor.type'],
