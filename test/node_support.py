@@ -122,6 +122,13 @@ def model_path(directory: Path, *, allow_shipped: bool = True) -> Path:
     return _cache['model']
 
 
+def load_test_model(directory: Path):
+    """Load the small test model (never the shipped one), trained once per process."""
+    from contact_detector.model.bundle import load_bundle
+
+    return load_bundle(path=model_path(directory, allow_shipped=False))
+
+
 def uses_shipped(path: Optional[Path]) -> bool:
     """Whether ``path`` is the shipped model."""
     return path is not None and Path(path).resolve() == SHIPPED_MODEL.resolve()

@@ -29,7 +29,6 @@ from rclpy.parameter import Parameter
 from rclpy.time import Time
 from std_msgs.msg import Float32MultiArray, Int16MultiArray
 
-from contact_detector.model.bundle import load_bundle
 from contact_detector.ros.node import ContactDetectorNode
 from contact_detector.sim.trial import simulate_trial
 import node_support
@@ -42,8 +41,7 @@ DIAG_PERIOD_S = 0.5
 @pytest.fixture(scope='module')
 def bundle(tmp_path_factory):
     # Always the test model: the expected release times are those of this model.
-    return load_bundle(path=node_support.model_path(tmp_path_factory.mktemp('model'),
-                                                    allow_shipped=False))
+    return node_support.load_test_model(tmp_path_factory.mktemp('model'))
 
 
 @pytest.fixture(scope='module')

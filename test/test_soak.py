@@ -25,14 +25,11 @@ import node_support
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
 from bench_soak import make_pool, run_soak  # noqa: E402
 
-from contact_detector.model.bundle import load_bundle  # noqa: E402
-
 
 @pytest.fixture(scope='module')
 def bundle(tmp_path_factory):
     # The small test model: memory does not depend on the forest, the run time does.
-    return load_bundle(path=node_support.model_path(tmp_path_factory.mktemp('model'),
-                                                    allow_shipped=False))
+    return node_support.load_test_model(tmp_path_factory.mktemp('model'))
 
 
 @pytest.fixture(scope='module')

@@ -22,14 +22,15 @@ A recording that is not clean goes through the per-message path, so the result i
 node's; only the speed differs.
 """
 
-import math
 from dataclasses import dataclass
+import math
 from typing import List, Optional
 
 import numpy as np
 
-from contact_detector.detection.detector import (_FLOAT32_MAX, AudioRateCheck, CLIP_LEVEL,
-                                                 ContactDetector)
+from contact_detector.detection.detector import (AudioRateCheck, CLIP_LEVEL, ContactDetector,
+                                                 Decisions)
+from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.streaming import (FeatureFrames, frame_ends, NoiseFloor,
                                                  StreamingFeatureExtractor, to_unit_audio)
@@ -63,7 +64,7 @@ class BlockFeatures:
     clipped: int
 
 
-def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[dict]:
+def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[Decisions]:
     """
     Decide a clean recording in blocks; None if the per-message path is needed.
 
@@ -77,10 +78,10 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
 
     Returns
     -------
-    dict or None
-        ``t, p, contact, valid`` (arrays, one entry per audio frame in emission order),
-        ``releases, events`` (lists of s) and ``counts``, exactly as the per-message path gives
-        them; None when the recording is not clean (see the module docstring).
+    Decisions or None
+        Every audio frame's decision in emission order, and the releases and events, exactly
+        as the per-message path gives them (the detector's counters too); None when the
+        recording is not clean (see the module docstring).
 
     """
     if not isinstance(detector, ContactDetector):
@@ -94,7 +95,10 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[di
                          skip_bad=False)
     if got is None:
         return None
-    return _decide(got, detector=detector)
+    detector.counts['audio_msgs'] += got.audio_msgs
+    detector.counts['wrench_msgs'] += got.wrench_msgs
+    detector.counts['audio_clipped'] += got.clipped
+    return detector.decide(got.frames, now=got.now)
 
 
 def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
@@ -148,9 +152,8 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
     arrival = latest[chunk_of]
     if not (np.all(np.diff(t) > 0) and np.all(np.diff(latest) >= 0)):
         return None         # a time anchor that moved back by more than a hop: per message
-    units = [to_unit_audio(c) for c in chunks]
-    clipped = sum(1 for u in units if u.size and float(np.max(np.abs(u))) >= CLIP_LEVEL)
-    samples = np.concatenate(units) if units else np.zeros(0)
+    clipped = sum(1 for u in chunks if float(np.max(np.abs(u))) >= CLIP_LEVEL)
+    samples = np.concatenate(chunks) if chunks else np.zeros(0)
     power = np.empty(ends.size)
     for lo in range(0, ends.size, POWER_BLOCK):
         block = ends[lo:lo + POWER_BLOCK]
@@ -210,33 +213,6 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
                          clipped=clipped)
 
 
-def _decide(got: BlockFeatures, *, detector: ContactDetector) -> dict:
-    """Do what ContactDetector._decide does per message, for all frames at once."""
-    t, x, valid, now = got.frames.t, got.frames.x, got.frames.valid.copy(), got.now
-    counts = detector.counts
-    finite = np.all(np.abs(x) <= _FLOAT32_MAX, axis=1)
-    counts['nonfinite_frames'] += int((valid & ~finite).sum())
-    valid &= finite
-    with np.errstate(invalid='ignore'):
-        stale = (now - t) > detector.settings.max_input_delay_s     # NaN (flush): never stale
-    counts['stale_frames'] += int(stale.sum())
-    valid &= ~stale
-    p = np.zeros(t.size)
-    if valid.any():
-        p[valid] = detector.forest.predict_proba(x[valid])
-    warm_until = float(t[0]) + detector.settings.warmup_s if t.size else math.inf
-    contact, releases = detector.logic.step(t=t, p=p, valid=valid, blocked=t < warm_until)
-    counts['audio_msgs'] += got.audio_msgs
-    counts['wrench_msgs'] += got.wrench_msgs
-    counts['audio_clipped'] += got.clipped
-    counts['frames'] += int(t.size)
-    counts['invalid_frames'] += int(t.size - valid.sum())
-    counts['events'] = detector.logic.events
-    counts['releases'] = detector.logic.releases
-    return dict(t=t, p=p, contact=contact, valid=valid, releases=releases,
-                events=list(detector.logic.last_events), counts=dict(counts))
-
-
 def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
           skip_bad: bool) -> Optional[tuple]:
     """Split the messages by kind, repeating the live per-message checks; None if not clean."""
@@ -245,17 +221,17 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
     wrench_idx, wt, wforce, wtorque, per_msg = [], [], [], [], []
     for event in events:
         if isinstance(event, AudioEvent):
-            samples, stamp = event.samples, event.stamp
-            if not (isinstance(samples, np.ndarray) and samples.ndim == 1 and samples.size
-                    and samples.dtype in (np.int16, np.float32, np.float64)
-                    and isinstance(stamp, float) and math.isfinite(stamp)):
+            stamp = event.stamp
+            try:
+                unit = to_unit_audio(event.samples)      # the live path's own check
+            except InputError:
                 return None
-            if samples.dtype != np.int16 and not np.all(np.isfinite(samples)):
+            if not (unit.size and isinstance(stamp, float) and math.isfinite(stamp)):
                 return None
-            if rate is not None and rate.update(n=samples.shape[0], stamp=stamp) is not None:
+            if rate is not None and rate.update(n=unit.shape[0], stamp=stamp) is not None:
                 return None
             audio_idx.append(len(nows))
-            chunks.append(samples)
+            chunks.append(unit)
             stamps.append(stamp)
         elif isinstance(event, WrenchEvent):
             t, force, torque = event.t, event.force, event.torque
@@ -292,22 +268,16 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
 
 
 def _anchors(*, sizes: np.ndarray, stamps: np.ndarray, framer) -> Optional[np.ndarray]:
-    """Return the time anchor after each chunk (AudioFramer._update_anchor); None on a jump."""
+    """Return the framer's time anchor after each chunk; None at a restart or a jump."""
     out = np.empty(sizes.size)
-    fs, drift = framer.sample_rate, framer.drift
     anchor = last = None
-    n_total = 0
+    n_before = 0
     for i, (n, stamp) in enumerate(zip(sizes.tolist(), stamps.tolist())):
-        offset = stamp - (n_total + n - 1) / fs
-        if anchor is None:
-            anchor = offset
-        else:
-            crept = anchor + drift * max(0.0, stamp - last)
-            if offset < crept - framer.backjump_tolerance_s or \
-                    offset > crept + framer.gap_tolerance_s:
-                return None
-            anchor = min(crept, offset)
+        anchor, verdict = framer.anchor_step(anchor=anchor, last_stamp=last, n_before=n_before,
+                                             n=n, stamp=stamp)
+        if verdict != 'ok':
+            return None
         last = stamp
-        n_total += n
+        n_before += n
         out[i] = anchor
     return out

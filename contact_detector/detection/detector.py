@@ -9,7 +9,7 @@ time the message was received, for the staleness check).
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as np
 
@@ -278,7 +278,7 @@ class ContactDetector:
             self.counts['audio_clipped'] += 1
         if self.extractor.audio.latest_time is not None:
             self.latest_audio_t = self.extractor.audio.latest_time
-        return self._decide(frames, now)
+        return self.decide(frames, now=now)
 
     def on_wrench(self, *, t: np.ndarray, force: np.ndarray, torque: np.ndarray,
                   now: Optional[float] = None) -> Decisions:
@@ -295,11 +295,11 @@ class ContactDetector:
                 pass
             return self.drop(kind='wrench', reason=str(err), stamp=stamp)
         self.latest_wrench_t = self.extractor.ft.last_input_t
-        return self._decide(frames, now)
+        return self.decide(frames, now=now)
 
     def flush(self) -> Decisions:
         """Decide every frame still waiting for F/T (end of a recording)."""
-        return self._decide(self.extractor.flush(), None)
+        return self.decide(self.extractor.flush(), now=None)
 
     # --- internals ---------------------------------------------------------------------------
 
@@ -352,7 +352,20 @@ class ContactDetector:
                                       start + self.settings.corrupt_holdoff_s)
         return Decisions.empty(error=message)
 
-    def _decide(self, frames: FeatureFrames, now: Optional[float]) -> Decisions:
+    def decide(self, frames: FeatureFrames, *,
+               now: Union[None, float, np.ndarray]) -> Decisions:
+        """
+        Decide feature frames the extractor has emitted: validity, forest, release logic.
+
+        Parameters
+        ----------
+        frames : FeatureFrames
+            In time order.
+        now : float, np.ndarray of shape (n,), or None
+            Receive time (s) of the message that emitted the frames (per frame when they
+            come from several messages; NaN or None: no staleness check, as at a flush).
+
+        """
         n = len(frames)
         self.counts['audio_restarts'] = self.extractor.audio.restarts
         self.counts['wrench_restarts'] = self.extractor.ft.restarts
@@ -365,7 +378,7 @@ class ContactDetector:
             self.counts['nonfinite_frames'] += int((valid & ~finite).sum())
             valid &= finite
         if now is not None:
-            stale = (now - frames.t) > self.settings.max_input_delay_s
+            stale = (now - frames.t) > self.settings.max_input_delay_s     # NaN: not stale
             self.counts['stale_frames'] += int(stale.sum())
             valid &= ~stale
         p = np.zeros(n)

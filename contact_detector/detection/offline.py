@@ -67,9 +67,11 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
         from contact_detector.detection.blocks import run_blocks
 
         events = list(events)
-        fields = run_blocks(events, detector=detector)
-        if fields is not None:
-            return Run(**fields)
+        decided = run_blocks(events, detector=detector)
+        if decided is not None:
+            return Run(t=decided.t, p=decided.p, contact=decided.contact, valid=decided.valid,
+                       releases=decided.releases, events=decided.events,
+                       counts=dict(detector.counts))
     blocks: List[Decisions] = []
     for event in events:
         if isinstance(event, AudioEvent):

@@ -4,6 +4,7 @@ Pure state machine, no ROS, no clock: frame times are passed in.
 """
 
 from collections import deque
+from itertools import islice
 import math
 from typing import Any, Dict, Mapping, Optional
 
@@ -107,17 +108,19 @@ class ReleaseLogic:
         recent.append(p)
         while len(recent) > max(rule.average_frames, rule.sustain_frames):
             recent.popleft()
-        n = len(recent)
-        if rule.average_frames == 1:
-            if p >= rule.threshold:
-                return True
-        elif n >= rule.average_frames and (
-                sum(list(recent)[n - rule.average_frames:]) / rule.average_frames
-                >= rule.threshold):
+        if self._mean_of_last(rule.average_frames) >= rule.threshold:
             return True
-        return (rule.sustain_frames > 0 and n >= rule.sustain_frames
-                and sum(list(recent)[n - rule.sustain_frames:]) / rule.sustain_frames
-                >= rule.sustain_threshold)
+        return rule.sustain_frames > 0 and (
+            self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
+
+    def _mean_of_last(self, k: int) -> float:
+        """Mean of the newest ``k`` probabilities; -1 while fewer are there."""
+        n = len(self._recent)
+        if n < k:
+            return -1.0
+        if k == 1:
+            return self._recent[-1]
+        return sum(islice(self._recent, n - k, n)) / k
 
     def step(self, *, t: np.ndarray, p: np.ndarray, valid: np.ndarray,
              blocked: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:

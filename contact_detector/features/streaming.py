@@ -186,23 +186,40 @@ class AudioFramer:
             return None
         return self._anchor + (self._n_total - 1) / self.sample_rate
 
+    def anchor_step(self, *, anchor: Optional[float], last_stamp: Optional[float],
+                    n_before: int, n: int, stamp: float) -> tuple[float, str]:
+        """
+        Return the anchor after a chunk of ``n`` samples stamped ``stamp``, and a verdict.
+
+        ``n_before`` samples came before it since the anchor was set (``anchor`` None: first
+        chunk). The verdict is 'ok', 'restart' (samples were lost: a new stream starts at this
+        chunk, whose anchor is returned) or 'jump' (time went backwards; the anchor is
+        unchanged). Pure: the offline block path replays the live sequence with it.
+        """
+        offset = stamp - (n_before + n - 1) / self.sample_rate
+        if anchor is None:
+            return offset, 'ok'
+        crept = anchor + self.drift * max(0.0, stamp - last_stamp)
+        if offset < crept - self.backjump_tolerance_s:
+            return anchor, 'jump'
+        if offset > crept + self.gap_tolerance_s:
+            return stamp - (n - 1) / self.sample_rate, 'restart'
+        return min(crept, offset), 'ok'
+
     def _update_anchor(self, n: int, stamp: float) -> None:
-        offset = stamp - (self._n_total + n - 1) / self.sample_rate
-        if self._anchor is None:
-            self._anchor = offset
-        else:
+        anchor, verdict = self.anchor_step(anchor=self._anchor, last_stamp=self._last_stamp,
+                                           n_before=self._n_total, n=n, stamp=stamp)
+        if verdict == 'jump':
             crept = self._anchor + self.drift * max(0.0, stamp - self._last_stamp)
-            if offset < crept - self.backjump_tolerance_s:
-                raise TimeJumpError(f'audio stamp {stamp:.6f} is '
-                                    f'{crept - offset:.3f} s earlier than the sample count '
-                                    'allows (time jumped backwards)')
-            if offset > crept + self.gap_tolerance_s:
-                # Samples were lost: start a new stream at this chunk.
-                self.restarts += 1
-                self.reset()
-                self._anchor = stamp - (n - 1) / self.sample_rate
-            else:
-                self._anchor = min(crept, offset)
+            offset = stamp - (self._n_total + n - 1) / self.sample_rate
+            raise TimeJumpError(f'audio stamp {stamp:.6f} is '
+                                f'{crept - offset:.3f} s earlier than the sample count '
+                                'allows (time jumped backwards)')
+        if verdict == 'restart':
+            # Samples were lost: start a new stream at this chunk.
+            self.restarts += 1
+            self.reset()
+        self._anchor = anchor
         self._last_stamp = stamp
 
     def push(self, samples: np.ndarray, *,
