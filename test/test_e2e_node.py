@@ -65,8 +65,12 @@ def test_release_after_onset_across_processes(model, tmp_path):
     assert len(releases) == 1, (releases, onset, logs['node'])
     delay = releases[0] - onset
     assert 0.0 < delay <= LATENCY_BUDGET_S, (delay, logs['node'])
-    # A decision for (nearly) every 10 ms audio frame of the trial reached the listener.
-    seconds = pub['audio_samples'] / 16000.0
+    # Decisions flowed before the first hit in the air (within the ~3 s DDS discovery can take
+    # under load, although each side already saw the other in the graph) ...
+    first = got['contact'][0][0]
+    assert first - pub['start_wall'] < 3.0 and first < min(in_air), (first, pub['start_wall'])
+    # ... and from then on a decision for (nearly) every 10 ms audio frame reached the listener.
+    seconds = pub['audio_times'][-1] - first
     assert len(got['contact']) >= 0.9 * seconds * 100, (len(got['contact']), seconds)
     assert abs(len(got['contact']) - len(got['contact_probability'])) <= 0.02 * seconds * 100
     assert 'RELEASE' in logs['node']
