@@ -9,6 +9,7 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
                                        TimeJumpError)
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
+from contact_detector.features.streaming import ForceTorqueStream
 
 T0 = 1_700_000_000.0
 
@@ -69,6 +70,52 @@ def test_mean_detrend_removes_the_static_load():
     np.testing.assert_allclose(light, heavy, atol=1e-12)
 
 
+@pytest.mark.parametrize('lever_m', [0.1, 0.25])
+def test_delta_angle_measures_the_lever_arm_of_a_load_change(lever_m):
+    # 10 N hanging at 0.1 m from the sensor; then 2 N of it is taken at lever_m (the table
+    # under the object's bottom, or a change at its centre of mass)
+    config = FeatureConfig(extra_features=('force_delta', 'torque_delta', 'ft_delta_angle'))
+    stream = ForceTorqueStream(config=config, input_rate=100.0)
+    n = 60
+    up = np.where(np.arange(n) >= 40, 2.0, 0.0)
+    force = np.stack([np.zeros(n), np.zeros(n), -10.0 + up], axis=1)
+    torque = np.stack([np.zeros(n), 1.0 - lever_m * up, np.zeros(n)], axis=1)
+    t, x = stream.push(t=T0 + np.arange(n) / 100, force=force, torque=torque)
+    assert stream.columns[-3:] == ('force_delta', 'torque_delta', 'ft_delta_angle')
+    settled = t >= T0 + 0.42     # both halves of the delta see the step's two sides
+    changed = settled & (t < T0 + 0.5)
+    np.testing.assert_allclose(x[changed, -3], -2.0)
+    np.testing.assert_allclose(x[changed, -2], -2.0 * lever_m)
+    np.testing.assert_allclose(np.tan(x[changed, -1]), lever_m)
+    assert np.all(x[changed, -1] < -np.pi / 2)     # unloading: the force dropped
+    # no change at all gives 0, not NaN
+    assert np.all(x[t < T0 + 0.4, -1] == 0.0)
+
+
+def test_change_against_the_median_baseline_does_not_echo_a_knock():
+    # a 20 ms knock loads the hand by 8 N; 0.1 s later the plain delta sees it leave its old
+    # window as an 8 N unloading, which looks like the table taking the weight
+    config = FeatureConfig(extra_features=('force_delta', 'force_change'))
+    stream = ForceTorqueStream(config=config, input_rate=100.0)
+    n = 80
+    force = np.zeros((n, 3))
+    force[:, 2] = -10.0
+    force[40:42, 2] -= 8.0
+    t, x = stream.push(t=T0 + np.arange(n) / 100, force=force, torque=np.zeros((n, 3)))
+    echo = (t >= T0 + 0.505) & (t <= T0 + 0.525)   # two of the three old samples are the knock
+    assert echo.sum() == 2
+    np.testing.assert_allclose(x[echo, -2], -8.0 * 2 / 3)
+    np.testing.assert_allclose(x[echo, -1], 0.0)
+    # while the knock is on, both see the loading
+    assert np.all(x[(t >= T0 + 0.40) & (t <= T0 + 0.41), -1] > 2.5)
+    # a lasting change is seen by both
+    force[60:, 2] += 2.0
+    stream.reset()
+    t, x = stream.push(t=T0 + np.arange(n) / 100, force=force, torque=np.zeros((n, 3)))
+    late = (t >= T0 + 0.62) & (t <= T0 + 0.765)   # until the baseline has moved too
+    np.testing.assert_allclose(x[late, -1], -2.0)
+
+
 # --- streaming extractor ------------------------------------------------------------------
 
 def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
@@ -112,7 +159,9 @@ configs = st.builds(
     ft_detrend=st.sampled_from(['none', 'mean']),
     extra_features=st.sampled_from([
         (), ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta'),
-        ('audio_peak_rel_db',)]),
+        ('audio_peak_rel_db',), ('ft_delta_angle',),
+        ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta',
+         'ft_delta_angle'), ('torque_change', 'ft_change_angle', 'force_delta')]),
 )
 
 

@@ -97,3 +97,10 @@ def test_node_parameters_to_rule_overrides():
         'sustain_frames': 0, 'threshold': 0.9}
     with pytest.raises(ConfigError, match='release.threshold'):
         rule_overrides({'release.threshold': 'high'})
+
+
+def test_rule_labels_name_every_path():
+    assert DecisionRule(threshold=0.7, confirm_frames=2).short() == 'p>=0.7 x2'
+    assert DecisionRule(threshold=0.85, sustain_frames=10,
+                        sustain_threshold=0.4).short() == 'p>=0.85 x1 or mean10>=0.4'
+    assert DecisionRule(threshold=0.7, average_frames=3).short() == 'mean3 p>=0.7 x1'

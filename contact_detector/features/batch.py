@@ -6,12 +6,13 @@ tests compare the two. Offline tools may use it for plots, never for training or
 (they run the streaming code, exactly as the node does).
 """
 
+import math
 from typing import Optional
 
 import numpy as np
 
 from contact_detector.features import spectral
-from contact_detector.features.config import FeatureConfig
+from contact_detector.features.config import DELTA_FEATURES, FeatureConfig
 from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
 
 
@@ -101,15 +102,16 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     if n_blocks == 0:
         dec = np.zeros((0, 6))
     mags = [np.linalg.norm(dec[:, :3], axis=1), np.linalg.norm(dec[:, 3:], axis=1)]
-    deltas = [name for name in config.extra_features if name.endswith('_delta')]
+    deltas = [name for name in config.extra_features if name in DELTA_FEATURES]
     n = config.ft_window
-    need = max(n, config.delta_lag + config.delta_window) if deltas else n
+    need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
+            if deltas else n)
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
     rows, times = [], []
     previous = [None, None]
     for end in range(need - 1, n_blocks, config.ft_hop):
         row = []
-        delta_row = []
+        delta, change = [], []
         for s, signal in enumerate(mags):
             frame = signal[end - n + 1:end + 1][None, :]
             spectrum = spectral.magnitude_spectrum(frames=frame, window_fn=config.ft_window_fn,
@@ -121,13 +123,18 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
             flux = spectral.spectral_flux(normalised=en, previous=prev)
             previous[s] = en
             row += [centroid[0], spread[0], flux[0]]
-            name = ('force_delta', 'torque_delta')[s]
-            if name in deltas:
-                w, lag = config.delta_window, config.delta_lag
+            if deltas:
+                w, lag, b = config.delta_window, config.delta_lag, config.baseline_window
                 new = signal[end - w + 1:end + 1].mean()
-                old = signal[end - lag - w + 1:end - lag + 1].mean()
-                delta_row.append(new - old)
-        rows.append(row + delta_row)
+                delta.append(new - signal[end - lag - w + 1:end - lag + 1].mean())
+                change.append(new - np.median(signal[end - lag - b + 1:end - lag + 1]))
+        derived = {}
+        if deltas:
+            derived = {'force_delta': delta[0], 'torque_delta': delta[1],
+                       'ft_delta_angle': math.atan2(delta[1], delta[0]),
+                       'force_change': change[0], 'torque_change': change[1],
+                       'ft_change_angle': math.atan2(change[1], change[0])}
+        rows.append(row + [derived[name] for name in deltas])
         times.append(dec_t[end])
     x = np.array(rows) if rows else np.zeros((0, len(columns)))
     return np.array(times), x, columns

@@ -30,13 +30,26 @@ PAPER_FEATURES = (
 #: minus the mean of the ``delta_window`` samples ending ``delta_lag`` F/T samples earlier),
 #: in N or N m; ``audio_power_rel_db`` is the audio power in dB above the tracked noise floor;
 #: ``audio_peak_rel_db`` its maximum over the newest ``peak_frames`` audio frames (a recent
-#: impact sound, while the F/T evidence of load transfer builds up).
+#: impact sound, while the F/T evidence of load transfer builds up); ``ft_delta_angle`` is
+#: ``atan2(torque_delta, force_delta)`` in rad, whose tangent is the lever arm in m of the
+#: change: the table pushes at the object's bottom, inertia and slosh act at its centre of mass
+#: and knocks on the hand near the sensor. ``*_change`` and ``ft_change_angle`` are the same
+#: against a robust baseline: the median of the ``baseline_window`` samples ending ``delta_lag``
+#: samples earlier, so that a short knock does not come back 0.1 s later as an opposite change.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
     'force_delta',
     'torque_delta',
+    'ft_delta_angle',
+    'force_change',
+    'torque_change',
+    'ft_change_angle',
 )
+
+#: Extra features computed from changes of |F| and |T| (they need ``delta_lag`` of history).
+DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change',
+                  'torque_change', 'ft_change_angle')
 
 WINDOW_FUNCTIONS = ('rect', 'hann')
 DETREND_MODES = ('none', 'mean')
@@ -68,9 +81,13 @@ class FeatureConfig:
     extra_features : tuple of str
         Names from :data:`EXTRA_FEATURES` appended after the paper's seven, in this order.
     delta_window : int
-        F/T samples averaged on each side of a ``*_delta`` feature.
+        F/T samples averaged on each side of a ``*_delta`` feature (and of the two changes
+        behind ``ft_delta_angle``).
     delta_lag : int
-        Distance in F/T samples between the two averages of a ``*_delta`` feature.
+        Distance in F/T samples between the two averages of a ``*_delta`` feature (and between
+        the newest samples and the end of the baseline of a ``*_change`` feature).
+    baseline_window : int
+        F/T samples whose median is the baseline of a ``*_change`` feature.
     noise_floor_tau_s : float
         Time constant in seconds with which the audio noise floor rises (it falls at once).
     peak_frames : int
@@ -88,6 +105,7 @@ class FeatureConfig:
     extra_features: tuple = ()
     delta_window: int = 3
     delta_lag: int = 10
+    baseline_window: int = 15
     noise_floor_tau_s: float = 2.0
     peak_frames: int = 10
 
@@ -101,7 +119,7 @@ class FeatureConfig:
                 raise ConfigError(f'FeatureConfig.{name} must be a finite number > 0, '
                                   f'got {value!r}')
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
-                          ('delta_lag', 1), ('peak_frames', 1)):
+                          ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')

@@ -24,7 +24,7 @@ import numpy as np
 
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
-from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
+from contact_detector.features.config import DELTA_FEATURES, FeatureConfig, PAPER_FEATURES
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
@@ -346,9 +346,10 @@ class ForceTorqueStream:
         self.decimation = int(round(ratio))
         self.gap_reset_s = max(gap_reset_s, 1.5 / input_rate)
         self.backjump_tolerance_s = backjump_tolerance_s
-        self.use_delta = [name for name in config.extra_features if name.endswith('_delta')]
+        self.use_delta = [name for name in config.extra_features if name in DELTA_FEATURES]
         n = config.ft_window
-        need = max(n, config.delta_lag + config.delta_window) if self.use_delta else n
+        need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
+                if self.use_delta else n)
         self.first_end = need - 1
         self.history = need
         self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
@@ -478,10 +479,20 @@ class ForceTorqueStream:
         out = np.empty((m, len(self.columns)))
         out[:, 0], out[:, 1], out[:, 2] = centroid[:m], spread[:m], flux[:m]
         out[:, 3], out[:, 4], out[:, 5] = centroid[m:], spread[m:], flux[m:]
+        derived = {}
+        if {'force_delta', 'torque_delta', 'ft_delta_angle'} & set(self.use_delta):
+            f, t = (delta_feature(signal=self._mag[:, k], ends=ends, window=cfg.delta_window,
+                                  lag=cfg.delta_lag) for k in (0, 1))
+            derived.update(force_delta=f, torque_delta=t,
+                           ft_delta_angle=delta_angle(force_delta=f, torque_delta=t))
+        if {'force_change', 'torque_change', 'ft_change_angle'} & set(self.use_delta):
+            f, t = (change_feature(signal=self._mag[:, k], ends=ends, window=cfg.delta_window,
+                                   baseline=cfg.baseline_window, lag=cfg.delta_lag)
+                    for k in (0, 1))
+            derived.update(force_change=f, torque_change=t,
+                           ft_change_angle=delta_angle(force_delta=f, torque_delta=t))
         for col, name in enumerate(self.use_delta, start=6):
-            signal = self._mag[:, 0 if name == 'force_delta' else 1]
-            out[:, col] = delta_feature(signal=signal, ends=ends, window=cfg.delta_window,
-                                        lag=cfg.delta_lag)
+            out[:, col] = derived[name]
         return out
 
 
@@ -508,6 +519,69 @@ def delta_feature(*, signal: np.ndarray, ends: np.ndarray, window: int, lag: int
     new = signal[ends[:, None] + offsets].mean(axis=1)
     old = signal[(ends - lag)[:, None] + offsets].mean(axis=1)
     return new - old
+
+
+def change_feature(*, signal: np.ndarray, ends: np.ndarray, window: int, baseline: int,
+                   lag: int) -> np.ndarray:
+    """
+    Change of a magnitude signal against a robust baseline.
+
+    ``mean(s[e-w+1..e]) - median(s[e-lag-b+1..e-lag])``: a knock shorter than half the
+    baseline does not move the median, so it is not seen again, with the opposite sign, when it
+    leaves the baseline (as it is by :func:`delta_feature` ``lag`` samples later).
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n,)
+        |F| in N or |T| in N m.
+    ends : np.ndarray, shape (m,)
+        Indices of the newest sample of each frame, ``>= lag + max(window, baseline) - 1``.
+    window, baseline, lag : int
+        Samples averaged, samples in the baseline, and distance from the newest sample to the
+        baseline's newest.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        Same unit as ``signal``.
+
+    """
+    new = signal[ends[:, None] + np.arange(1 - window, 1)].mean(axis=1)
+    old = signal[(ends - lag)[:, None] + np.arange(1 - baseline, 1)]
+    # np.median's value, from one partition (np.median itself costs ~3x as much per call)
+    k = baseline // 2
+    if baseline % 2:
+        base = np.partition(old, k, axis=1)[:, k]
+    else:
+        part = np.partition(old, (k - 1, k), axis=1)
+        base = (part[:, k - 1] + part[:, k]) / 2
+    return new - base
+
+
+def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:
+    """
+    Direction of a load change in the (force, torque) plane: ``atan2(dT, dF)``.
+
+    A force change of size ``dF`` acting on a line at distance ``r`` from the sensor changes the
+    torque by about ``r dF``, so ``tan(angle) = dT / dF`` is that lever arm in m, whatever the
+    object weighs. Contact with the table acts at the bottom of the object, inertial forces at
+    its centre of mass, knocks on the hand near the sensor; the sign tells unloading
+    (``dF < 0``, the table takes weight) from loading.
+
+    Parameters
+    ----------
+    force_delta : np.ndarray, shape (m,)
+        Change of |F| (:func:`delta_feature`), N.
+    torque_delta : np.ndarray, shape (m,)
+        Change of |T| over the same samples, N m.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        Angle in rad, in ``[-pi, pi]``; 0 when nothing changed.
+
+    """
+    return np.arctan2(torque_delta, force_delta)
 
 
 class StreamingFeatureExtractor:

@@ -122,6 +122,15 @@ class DecisionRule:
                      f'sustain_threshold={self.sustain_threshold:.3f}')
         return text
 
+    def short(self) -> str:
+        """Return the rule as a table label, e.g. ``p>=0.85 x1 or mean10>=0.4``."""
+        text = f'p>={self.threshold:g} x{self.confirm_frames}'
+        if self.average_frames > 1:
+            text = f'mean{self.average_frames} ' + text
+        if self.sustain_frames > 0:
+            text += f' or mean{self.sustain_frames}>={self.sustain_threshold:g}'
+        return text
+
     def to_dict(self) -> dict:
         """Plain-JSON form, stored in bundles and cards."""
         return dataclasses.asdict(self)

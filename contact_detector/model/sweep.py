@@ -122,7 +122,7 @@ def score_rules(*, forest: RandomForestClassifier, frames: Sequence[TrialFrames]
         precision = tp / max(1, int(yp.sum()))
         recall = tp / max(1, int(y.sum()))
         rows.append(SweepRow(setting=setting.name,
-                             rule=f'p>={rule.threshold:g} x{rule.confirm_frames}',
+                             rule=rule.short(),
                              summary=summarize(outcomes), precision=precision,
                              recall=recall))
     return rows
