@@ -36,7 +36,10 @@ def main() -> None:
     setting = FeatureSetting('shipped', bundle.feature_config,
                              LabelWindow(**bundle.label_window))
     rules = rule_grid() + [DecisionRule(threshold=t, confirm_frames=k)
-                           for t in (0.6, 0.8) for k in (1, 2, 3)]
+                           for t in (0.6, 0.8, 0.85) for k in (1, 2, 3)]
+    # the fast single-frame path with a slow path for quiet contacts (docs/model.md)
+    rules += [DecisionRule(threshold=t, confirm_frames=1, sustain_frames=10,
+                           sustain_threshold=s) for t in (0.8, 0.85, 0.9) for s in (0.4, 0.5)]
     rate = bundle.training.get('audio_rate', 16000.0)
     wrench = bundle.training.get('wrench_rate', 100.0)
     for tag, events in ((f'own {len(own)} test trials', own),

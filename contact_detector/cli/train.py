@@ -23,7 +23,8 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.metrics import score_trial, summarize, Truth
-from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VERSION,
+                                              FeatureConfig)
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
@@ -32,14 +33,18 @@ from contact_detector.model.training import (LabelWindow, read_labels_csv, run_s
                                              trial_features)
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
-#: sample with its mean removed, the four extra features, labels covering the first 0.3 s of
-#: the contact, release after two consecutive frames with P(contact) >= 0.7. The paper's settings
-#: (W160/H128, 7 features, 0.1 s labels) are one row of that table.
+#: sample with its mean removed, the eight extra features, labels covering the first 0.3 s of
+#: the contact; release at the first frame where every tree says contact (p >= 0.95 with 10
+#: trees), or when the mean P(contact) of the last 15 frames reaches 0.5 (quiet contacts). The
+#: paper's settings (W160/H128, 7 features, 0.1 s labels) are one row of that table.
 DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
                                  extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
-                                                 'force_delta', 'torque_delta'))
+                                                 'force_delta', 'torque_delta',
+                                                 'ft_delta_angle', 'force_change',
+                                                 'torque_change', 'ft_change_angle'))
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
-DEFAULT_RULE = DecisionRule(threshold=0.7, confirm_frames=2, refractory_s=1.0)
+DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
+                            sustain_frames=15, sustain_threshold=0.5)
 
 
 def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,8 +58,8 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"remove each F/T window's mean (default {d.ft_detrend})")
     parser.add_argument('--ft-window-fn', choices=('rect', 'hann'), default=d.ft_window_fn)
     parser.add_argument('--extra-features', default=','.join(d.extra_features),
-                        help='comma-separated extra features (audio_power_rel_db, '
-                             'force_delta, torque_delta)')
+                        help='comma-separated extra features, from '
+                             f"{', '.join(EXTRA_FEATURES)}")
     parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
                         help='label window start after the onset, s')
     parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
