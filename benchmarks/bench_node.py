@@ -240,6 +240,9 @@ def main() -> None:
                         help='replay: sleep this long before each callback (cold caches, as '
                         'in a live node); default 0 (back to back)')
     parser.add_argument('--replay-only', action='store_true', help='skip the live runs')
+    parser.add_argument('--live-only', action='store_true', help='skip the replays')
+    parser.add_argument('--only', default='', help='run one configuration, AUDIO_HZ:FT_HZ '
+                        '(e.g. 44100:100)')
     args = parser.parse_args()
     if args.cmd == '_serve':
         serve(args)
@@ -249,6 +252,10 @@ def main() -> None:
     os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
     sys.path.insert(0, str(REPO / 'test'))
     import node_support
+    configs = CONFIGS
+    if args.only:
+        audio_hz, ft_hz = args.only.split(':')
+        configs = ((int(audio_hz), float(ft_hz)),)
     work = Path(tempfile.mkdtemp(prefix='bench_node_'))
     model = args.model or str(node_support.model_path(work))
     print(f'node benchmark, model {model}, median of {args.repeats} runs, '
@@ -260,7 +267,7 @@ def main() -> None:
           '| wrench callback p50 / p99 (ms) | CPU time per audio / wrench callback, '
           'p50 / p99 (ms) |')
     print('|---|---|---|---|---|---|')
-    for audio_rate, ft_rate in CONFIGS:
+    for audio_rate, ft_rate in ([] if args.live_only else configs):
         runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate,
                        gap_s=args.gap_ms * 1e-3)
                 for _ in range(args.repeats)]
@@ -277,7 +284,7 @@ def main() -> None:
           '| wrench callback p50 / p99 (ms) | end to end p50 / p99 (ms) '
           '| frames: node / listener / expected, per run |')
     print('|---|---|---|---|---|---|---|')
-    for audio_rate, ft_rate in CONFIGS:
+    for audio_rate, ft_rate in configs:
         runs = [run_once(model=model, audio_rate=audio_rate, ft_rate=ft_rate, work=work,
                          executor=args.executor)
                 for _ in range(args.repeats)]
