@@ -270,7 +270,8 @@ class ContactDetector:
         try:
             unit = to_unit_audio(samples)
             self._check_rate(unit.shape[0], stamp)
-            frames = self._with_jump_reset(lambda: self.extractor.push_audio(unit, stamp=stamp))
+            push = self.extractor.push_unit_audio       # unit is checked: not again
+            frames = self._with_jump_reset(lambda: push(unit, stamp=stamp))
         except InputError as err:
             return self.drop(kind='audio', reason=str(err), stamp=stamp)
         if unit.size and float(np.max(np.abs(unit))) >= CLIP_LEVEL:

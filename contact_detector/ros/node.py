@@ -48,6 +48,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.io.cdr import BOOL_FALSE, BOOL_TRUE, write_float32
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
@@ -180,6 +181,7 @@ class ContactDetectorNode(Node):
 
     def _setup(self, bundle: Optional[ModelBundle]) -> None:
         self.config: NodeConfig = declare_parameters(self)
+        self._node_clock = self.get_clock()
         cfg = self.config
         self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
         if bundle is None:
@@ -211,7 +213,6 @@ class ContactDetectorNode(Node):
         self._window_start = time.monotonic()
         self._window_counts: Dict[str, int] = {}
 
-        self._contact_msg, self._prob_msg = Bool(), Float32()
         # One second of frames: a reliable subscriber that stalls briefly loses nothing.
         output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                                 reliability=ReliabilityPolicy.RELIABLE)
@@ -280,7 +281,7 @@ class ContactDetectorNode(Node):
     # --- helpers ---------------------------------------------------------------------------------
 
     def _now(self) -> float:
-        return self.get_clock().now().nanoseconds * 1e-9
+        return self._node_clock.now().nanoseconds * 1e-9
 
     def _warn(self, key: str, message: str) -> None:
         suppressed = self._throttle(key, self.config.log_throttle_s)
@@ -455,12 +456,11 @@ class ContactDetectorNode(Node):
         n = len(decisions)
         if n == 0:
             return
-        contact_msg, prob_msg = self._contact_msg, self._prob_msg
-        for i in range(n):
-            contact_msg.data = bool(decisions.contact[i])
-            prob_msg.data = float(decisions.p[i])
-            self.contact_pub.publish(contact_msg)
-            self.probability_pub.publish(prob_msg)
+        # Serialised bytes: rclpy publishes them as they are (no message conversion per frame).
+        contact_pub, probability_pub = self.contact_pub, self.probability_pub
+        for contact, p in zip(decisions.contact.tolist(), decisions.p.tolist()):
+            contact_pub.publish(BOOL_TRUE if contact else BOOL_FALSE)
+            probability_pub.publish(write_float32(p))
         self.counts['contact_msgs'] += n
         for t in decisions.releases:
             self._release(t)
