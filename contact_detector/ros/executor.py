@@ -67,6 +67,7 @@ class HotPathExecutor(SingleThreadedExecutor):
         lazy = [sub for sub in lazy if sub in hot]
         # Lazy ones first: their messages are taken before the others'.
         self._hot = lazy + [sub for sub in hot if sub not in lazy]
+        self._hot_ids = {id(sub) for sub in self._hot}
         self._n_lazy = len(lazy)
         self._lazy_ids = {id(sub) for sub in lazy}
         self._wanted = wanted
@@ -74,6 +75,10 @@ class HotPathExecutor(SingleThreadedExecutor):
         self._lazy_due = 0.0
         self._poll_s = float(poll_s)
         self._next_stock = 0.0
+
+    def can_execute(self, entity) -> bool:
+        """Leave the hot subscriptions out of the stock executor's wait set: served here only."""
+        return id(entity) not in self._hot_ids and super().can_execute(entity)
 
     def spin_once(self, timeout_sec: Optional[float] = None) -> None:
         """Serve due stock callbacks, then wait for hot messages until the next stock pass."""
