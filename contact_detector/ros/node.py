@@ -647,15 +647,17 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     Return the executor ``executor.type`` asks for, with ``node`` added.
 
-    ``hot_path`` wakes up for audio chunks and for wrench messages only while an audio frame
-    waits for F/T data: the wrench messages that arrived meanwhile are taken first at the next
-    wake-up (half the wake-ups at 100 Hz F/T, each costing a cold start). They are taken at
-    least every half of the time the wrench queue (``qos.depth``) lasts at ``wrench.rate``.
-    Wrench stamped on receipt (``wrench.stamp_source: receive``) wakes the node at once.
+    With ``executor.lazy_wrench``, ``hot_path`` wakes up for audio chunks and for wrench
+    messages only while an audio frame waits for F/T data: the wrench messages that arrived
+    meanwhile are taken first at the next wake-up (fewer wake-ups, each costing a cold start;
+    their processing adds to that chunk's latency). They are taken at least every half of the
+    time the wrench queue (``qos.depth``) lasts at ``wrench.rate``. Wrench stamped on receipt
+    (``wrench.stamp_source: receive``) wakes the node at once.
     """
     cfg = node.config
     if cfg.executor_type == 'hot_path':
-        lazy = [node.wrench_sub] if cfg.wrench_stamp_source == 'header' else []
+        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench
+                and cfg.wrench_stamp_source == 'header' else [])
         executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
                                    lazy=lazy, wanted=node.wrench_wanted,
                                    lazy_max_s=min(cfg.executor_poll_s,
