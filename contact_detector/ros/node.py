@@ -181,7 +181,8 @@ class ContactDetectorNode(Node):
 
     def _setup(self, bundle: Optional[ModelBundle]) -> None:
         self.config: NodeConfig = declare_parameters(self)
-        self._node_clock = self.get_clock()
+        # rcl's clock itself: Clock.now() wraps it in a Time object (~2 us more per read).
+        self._clock_handle = self.get_clock().handle
         cfg = self.config
         self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
         if bundle is None:
@@ -281,7 +282,7 @@ class ContactDetectorNode(Node):
     # --- helpers ---------------------------------------------------------------------------------
 
     def _now(self) -> float:
-        return self._node_clock.now().nanoseconds * 1e-9
+        return self._clock_handle.get_now().nanoseconds * 1e-9
 
     def _warn(self, key: str, message: str) -> None:
         suppressed = self._throttle(key, self.config.log_throttle_s)
