@@ -29,6 +29,8 @@ from rclpy.executors import (ConditionReachedException, ExternalShutdownExceptio
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 
+RCLError = _rclpy.RCLError
+
 #: At most this many stock callbacks are served per poll (bounds a burst of service calls).
 MAX_STOCK_CALLBACKS_PER_POLL = 50
 #: At most this many messages are taken from one subscription per wake-up (bounds a burst).
@@ -82,6 +84,15 @@ class HotPathExecutor(SingleThreadedExecutor):
 
     def spin_once(self, timeout_sec: Optional[float] = None) -> None:
         """Serve due stock callbacks, then wait for hot messages until the next stock pass."""
+        try:
+            self._spin_once(timeout_sec)
+        except (RCLError, InvalidHandle):
+            # SIGINT shuts the context down at any moment, e.g. while a wait set is made.
+            if self._context.ok():
+                raise
+            raise ExternalShutdownException()
+
+    def _spin_once(self, timeout_sec: Optional[float]) -> None:
         now = time.monotonic()
         if now >= self._next_stock:
             self._next_stock = now + self._poll_s
