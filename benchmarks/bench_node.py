@@ -13,10 +13,13 @@ the simulated trial of test/test_e2e_node.py), medians over the repeats:
    parameters) and a listener. Gives the node process's CPU time / wall time while the trial
    streams (psutil, start-up excluded), the node's callback latency, and end to end: the
    publisher's ``publish`` of the audio chunk that completes a frame to the listener's receipt
-   of that frame's ``contact`` (DDS both ways, executor wake-ups, any wait for F/T).
+   of that frame's ``contact`` (DDS both ways, executor wake-ups, any wait for F/T), and the
+   node's latency from the audio message's arrival (DDS reception time) to the return of the
+   audio callback that published its frames (wrench messages taken before it included).
 
     python benchmarks/bench_node.py [--repeats 3] [--model PATH] [--executor single_threaded]
-                                    [--gap-ms 4 --replay-only]
+                                    [--gap-ms 4 --replay-only] [--only 44100:100 --live-only]
+                                    [--set executor.lazy_wrench=true]
 
 The shipped model is used if it exists (else a small test model is trained first). On a
 machine shared with other work the latency tails measure the scheduler as much as the node:
@@ -48,6 +51,7 @@ def serve(args: argparse.Namespace) -> None:
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.parameter import Parameter
+    from rclpy.subscription import Subscription
 
     from contact_detector.ros.node import ContactDetectorNode, make_executor
 
@@ -56,7 +60,22 @@ def serve(args: argparse.Namespace) -> None:
         Parameter('model.path', value=args.model),
         Parameter('audio.sample_rate', value=float(args.audio_rate)),
         Parameter('wrench.rate', value=float(args.ft_rate)),
-        Parameter('executor.type', value=args.executor)])
+        Parameter('executor.type', value=args.executor),
+        *[Parameter(name, value=json.loads(value))
+          for name, value in (item.split('=', 1) for item in args.set)]])
+    # Arrival (the DDS reception time of the audio message) -> return of the audio callback
+    # that published frames: includes any wait in the executor and the wrench messages taken
+    # before the chunk, which the node's own latency (from callback entry) leaves out.
+    arrival = []
+    on_audio = node.audio_sub.callback
+
+    def timed_on_audio(msg, info) -> None:
+        published = node.counts['contact_msgs']
+        on_audio(msg)
+        if node.counts['contact_msgs'] > published:
+            arrival.append((time.time_ns() - info['received_timestamp']) * 1e-9)
+    node.audio_sub.callback = timed_on_audio
+    node.audio_sub._callback_type = Subscription.CallbackType.WithMessageInfo
     executor = make_executor(node)
     gc.freeze()
     try:
@@ -64,6 +83,7 @@ def serve(args: argparse.Namespace) -> None:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     Path(args.out).write_text(json.dumps({
+        'arrival': arrival,
         'audio': node.latency_samples('audio').tolist(),
         'wrench': node.latency_samples('wrench').tolist(),
         'counts': node.detector_counts(), 'model_id': node.bundle.model_id}))
@@ -91,7 +111,7 @@ def _frame_chunks(*, audio_rate: int, n_chunks: int, chunk: int) -> np.ndarray:
 
 
 def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
-             executor: str) -> dict:
+             executor: str, settings=()) -> dict:
     """One three-process run; return the measurements."""
     import psutil
     chunk = audio_rate // 100
@@ -100,7 +120,8 @@ def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
     for path in list(paths.values()) + [stop]:
         if path.exists():
             path.unlink()
-    node = _spawn([__file__, '_serve', '--executor', executor, '--model', model,
+    sets = [arg for item in settings for arg in ('--set', item)]
+    node = _spawn([__file__, '_serve', '--executor', executor, '--model', model, *sets,
                    '--audio-rate', str(audio_rate),
                    '--ft-rate', str(ft_rate), '--out', str(paths['node'])], work / 'node.log')
     listener = _spawn([str(HELPER), 'listen', '--out', str(paths['listen']), '--stop-file',
@@ -138,6 +159,7 @@ def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
         sent = np.asarray(pub['audio_times'])[completes]
         e2e = (np.asarray(received) - sent).tolist()
     return {'cpu': cpu, 'sys_cpu': sys_cpu, 'audio': served['audio'],
+            'arrival': served['arrival'],
             'wrench': served['wrench'], 'e2e': e2e, 'frames': len(received),
             'node_frames': served['counts']['frames'], 'expected': int(completes.size),
             'model_id': served['model_id'], 'late_p99_ms': pub['late_p99_ms']}
@@ -240,6 +262,11 @@ def main() -> None:
                         help='replay: sleep this long before each callback (cold caches, as '
                         'in a live node); default 0 (back to back)')
     parser.add_argument('--replay-only', action='store_true', help='skip the live runs')
+    parser.add_argument('--live-only', action='store_true', help='skip the replays')
+    parser.add_argument('--set', action='append', default=[], metavar='NAME=JSON',
+                        help='live: a node parameter, e.g. executor.lazy_wrench=true')
+    parser.add_argument('--only', default='', help='run one configuration, AUDIO_HZ:FT_HZ '
+                        '(e.g. 44100:100)')
     args = parser.parse_args()
     if args.cmd == '_serve':
         serve(args)
@@ -249,6 +276,10 @@ def main() -> None:
     os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
     sys.path.insert(0, str(REPO / 'test'))
     import node_support
+    configs = CONFIGS
+    if args.only:
+        audio_hz, ft_hz = args.only.split(':')
+        configs = ((int(audio_hz), float(ft_hz)),)
     work = Path(tempfile.mkdtemp(prefix='bench_node_'))
     model = args.model or str(node_support.model_path(work))
     print(f'node benchmark, model {model}, median of {args.repeats} runs, '
@@ -260,7 +291,7 @@ def main() -> None:
           '| wrench callback p50 / p99 (ms) | CPU time per audio / wrench callback, '
           'p50 / p99 (ms) |')
     print('|---|---|---|---|---|---|')
-    for audio_rate, ft_rate in CONFIGS:
+    for audio_rate, ft_rate in ([] if args.live_only else configs):
         runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate,
                        gap_s=args.gap_ms * 1e-3)
                 for _ in range(args.repeats)]
@@ -274,19 +305,20 @@ def main() -> None:
     print(f'\nLive: publisher, node ({args.executor} executor) and listener processes on '
           'loopback DDS, one simulated trial (~9 s) at the real rate\n')
     print('| audio | F/T | node CPU, % of one core (sys) | audio callback p50 / p99 (ms) '
+          '| audio arrival -> published p50 / p99 (ms) '
           '| wrench callback p50 / p99 (ms) | end to end p50 / p99 (ms) '
           '| frames: node / listener / expected, per run |')
-    print('|---|---|---|---|---|---|---|')
-    for audio_rate, ft_rate in CONFIGS:
+    print('|---|---|---|---|---|---|---|---|')
+    for audio_rate, ft_rate in configs:
         runs = [run_once(model=model, audio_rate=audio_rate, ft_rate=ft_rate, work=work,
-                         executor=args.executor)
+                         executor=args.executor, settings=args.set)
                 for _ in range(args.repeats)]
         cpu = statistics.median(100 * r['cpu'] for r in runs)
         sys_cpu = statistics.median(100 * r['sys_cpu'] for r in runs)
         frames = ', '.join(f'{r["node_frames"]}/{r["frames"]}/{r["expected"]}' for r in runs)
         print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} ({sys_cpu:.1f}) '
-              f'| {_pair(runs, "audio")} | {_pair(runs, "wrench")} | {_pair(runs, "e2e")} '
-              f'| {frames} |', flush=True)
+              f'| {_pair(runs, "audio")} | {_pair(runs, "arrival")} | {_pair(runs, "wrench")} '
+              f'| {_pair(runs, "e2e")} | {frames} |', flush=True)
     print(f'\nmodel id {runs[0]["model_id"]}; publisher lateness p99 '
           f'{runs[0]["late_p99_ms"]:.2f} ms; logs in {work}')
 

@@ -77,6 +77,21 @@ def test_bool(store):
         assert cdr.read_bool(raw).data is value
 
 
+def test_written_outputs_are_rosbags_bytes(store):
+    t = store.types
+    for value in (True, False):
+        raw = bytes(store.serialize_cdr(t['std_msgs/msg/Bool'](data=value), 'std_msgs/msg/Bool'))
+        assert (cdr.BOOL_TRUE if value else cdr.BOOL_FALSE)[:5] == raw[:5]
+        assert cdr.read_bool(cdr.BOOL_TRUE if value else cdr.BOOL_FALSE).data is value
+    rng = np.random.default_rng(1)
+    for value in [0.0, 1.0, 1 / 3, 0.1, 1e-45, 0.9999999999] + list(rng.random(200)):
+        # rclpy rounds the Python float to float32 on assignment, as numpy does.
+        expect = np.float32(value)
+        raw = bytes(store.serialize_cdr(t['std_msgs/msg/Float32'](data=expect),
+                                        'std_msgs/msg/Float32'))
+        assert cdr.write_float32(float(value)) == raw
+
+
 def test_unsure_input_goes_back_to_rosbags(store):
     msg = _wrench(store, sec=1, nanosec=2, frame_id='f', values=np.arange(6.0))
     raw = bytes(store.serialize_cdr(msg, 'geometry_msgs/msg/WrenchStamped'))

@@ -104,6 +104,11 @@ class Harness:
         if executor == 'hot_path':
             self.executor = HotPathExecutor(hot=self.node.subscriptions, poll_s=0.01,
                                             context=context)
+        elif executor == 'lazy_wrench':
+            self.executor = HotPathExecutor(hot=self.node.subscriptions, poll_s=0.01,
+                                            lazy=[self.node.wrench_sub],
+                                            wanted=self.node.wrench_wanted, lazy_max_s=30.0,
+                                            context=context)
         else:
             self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
@@ -260,6 +265,46 @@ def test_arm_and_reset_services(harness_factory, trial, executor):
     assert [m.data for m in h.release] == [True]
     assert h.node.detector_counts()['releases'] == 1 and not h.node.detector.armed
     assert h.call(h.arm, SetBool.Request(data=False)).message == 'release disarmed'
+
+
+def test_lazy_wrench_is_taken_with_the_next_audio(harness_factory, model, trial):
+    h = harness_factory(executor='lazy_wrench')
+    events = node_support.trial_events(trial, t_from=trial.onset_t - 1.0,
+                                       t_to=trial.onset_t + 0.5)
+    first = next(e for e in events if e.kind == 'wrench')
+    events = events[events.index(first):]
+    h.set_clock(first.t)
+    # A wrench message alone does not wake the executor (no audio frame waits for F/T).
+    h.wrench_pub.publish(wrench_msg(trial.wrench_t[first.lo], trial.force[first.lo],
+                                    trial.torque[first.lo]))
+    for _ in range(5):
+        h.executor.spin_once(timeout_sec=0.01)
+    assert h.node.wrench.received == 0
+    # Each audio chunk is published after the wrench messages before it, without waiting
+    # for them: the executor takes the queued wrench when the chunk (or a frame waiting for
+    # F/T) wakes it, and the decisions are the per-message ones, whatever the order.
+    fed, pending = [], [first]
+    for e in events[1:]:
+        if e.kind == 'wrench':
+            h.wrench_pub.publish(wrench_msg(trial.wrench_t[e.lo], trial.force[e.lo],
+                                            trial.torque[e.lo]))
+            pending.append(e)
+            continue
+        tick = np.floor((e.t - trial.start_time) / TICK_S) * TICK_S + trial.start_time
+        if tick > h.clock_t + 1e-9:
+            h.set_clock(tick)
+        n = h.node.audio.received
+        h.audio_pub.publish(Int16MultiArray(data=trial.audio[e.lo:e.hi].tolist()))
+        h.spin_until(lambda: h.node.audio.received > n)
+        fed += [(h.clock_t, w) for w in pending] + [(h.clock_t, e)]
+        pending = []
+    h.flush_outputs()
+    assert h.node.wrench.received >= len([f for f in fed if f[1].kind == 'wrench']) - 2
+    p, contact, _ = offline_run(model, trial, fed)
+    counts = h.node.detector_counts()
+    assert counts['frames'] == len(p) == len(h.prob) > 100 and counts['wrench_dropped'] == 0
+    np.testing.assert_array_equal([m.data for m in h.contact], contact)
+    np.testing.assert_array_equal([m.data for m in h.prob], p.astype(np.float32))
 
 
 # --- parameters ----------------------------------------------------------------------------------

@@ -270,7 +270,8 @@ class ContactDetector:
         try:
             unit = to_unit_audio(samples)
             self._check_rate(unit.shape[0], stamp)
-            frames = self._with_jump_reset(lambda: self.extractor.push_audio(unit, stamp=stamp))
+            push = self.extractor.push_unit_audio       # unit is checked: not again
+            frames = self._with_jump_reset(lambda: push(unit, stamp=stamp))
         except InputError as err:
             return self.drop(kind='audio', reason=str(err), stamp=stamp)
         if unit.size and float(np.max(np.abs(unit))) >= CLIP_LEVEL:
@@ -371,6 +372,8 @@ class ContactDetector:
         self.counts['wrench_restarts'] = self.extractor.ft.restarts
         if n == 0:
             return Decisions.empty()
+        if n == 1 and not isinstance(now, np.ndarray):
+            return self._decide_one(frames, now=now)
         valid = frames.valid.copy()
         # Finite input can still overflow (e.g. float audio of 1e200): such rows are invalid.
         finite = np.all(np.abs(frames.x) <= _FLOAT32_MAX, axis=1)
@@ -395,6 +398,31 @@ class ContactDetector:
         self.counts['events'] = self.logic.events
         self.counts['releases'] = self.logic.releases
         return Decisions(t=frames.t, p=p, contact=contact, valid=valid, releases=releases,
+                         events=list(self.logic.last_events))
+
+    def _decide_one(self, frames: FeatureFrames, *, now: Optional[float]) -> Decisions:
+        """:meth:`decide` for one frame (the live case) in scalars: the same numbers."""
+        t = float(frames.t[0])
+        x = frames.x[0]
+        valid = bool(frames.valid[0])
+        # not <=: NaN is not finite either.
+        if not float(np.max(np.abs(x))) <= _FLOAT32_MAX:
+            self.counts['nonfinite_frames'] += int(valid)
+            valid = False
+        if now is not None and (now - t) > self.settings.max_input_delay_s:
+            self.counts['stale_frames'] += 1
+            valid = False
+        p = self.forest.predict_one(x) if valid else 0.0
+        if self._warm_until is None:
+            self._warm_until = t + self.settings.warmup_s
+        blocked = t < self._warm_until or t < self._holdoff_until
+        contact, releases = self.logic.step_one(t=t, p=p, ok=valid and not blocked)
+        self.counts['frames'] += 1
+        self.counts['invalid_frames'] += int(not valid)
+        self.counts['events'] = self.logic.events
+        self.counts['releases'] = self.logic.releases
+        return Decisions(t=frames.t, p=np.array([p]), contact=np.array([contact]),
+                         valid=np.array([valid]), releases=releases,
                          events=list(self.logic.last_events))
 
     def with_rule(self, rule: DecisionRule) -> 'ContactDetector':

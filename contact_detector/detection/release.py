@@ -151,27 +151,56 @@ class ReleaseLogic:
         ok = np.asarray(valid, dtype=bool)
         if blocked is not None:
             ok = ok & ~np.asarray(blocked, dtype=bool)
-        p = np.asarray(p)
         contact = np.zeros(ok.shape[0], dtype=bool)
         releases = []
         self.last_events = []
-        need = self.rule.confirm_frames
-        for i in range(contact.shape[0]):
-            if not ok[i]:
-                self._recent.clear()
-                self._run = 0
-                continue
-            contact[i] = self._is_contact(float(p[i]))
-            if not contact[i]:
-                self._run = 0
-                continue
-            self._run += 1
-            if self._run == need and t[i] - self._last_event_t >= self.rule.refractory_s:
-                self._last_event_t = float(t[i])
-                self.events += 1
-                self.last_events.append(float(t[i]))
-                if self.armed:
-                    self.armed = False
-                    self.releases += 1
-                    releases.append(float(t[i]))
+        for i, (ti, pi, oki) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
+                                              np.asarray(p, dtype=np.float64).tolist(),
+                                              ok.tolist())):
+            contact[i] = self._frame(ti, pi, oki, releases)
         return contact, releases
+
+    def step_one(self, *, t: float, p: float, ok: bool) -> tuple[bool, list]:
+        """
+        Decide one frame: :meth:`step` for scalars.
+
+        Parameters
+        ----------
+        t : float
+            Frame time, s.
+        p : float
+            P(contact).
+        ok : bool
+            Valid and not blocked.
+
+        Returns
+        -------
+        contact : bool
+        releases : list of float
+            The frame's time if a release fired, else empty.
+
+        """
+        releases: list = []
+        self.last_events = []
+        return self._frame(float(t), float(p), bool(ok), releases), releases
+
+    def _frame(self, t: float, p: float, ok: bool, releases: list) -> bool:
+        """Advance the state machine by one frame; return whether it is contact."""
+        if not ok:
+            self._recent.clear()
+            self._run = 0
+            return False
+        if not self._is_contact(p):
+            self._run = 0
+            return False
+        self._run += 1
+        if self._run == self.rule.confirm_frames \
+                and t - self._last_event_t >= self.rule.refractory_s:
+            self._last_event_t = t
+            self.events += 1
+            self.last_events.append(t)
+            if self.armed:
+                self.armed = False
+                self.releases += 1
+                releases.append(t)
+        return True

@@ -72,9 +72,23 @@ def magnitude_spectrum(*, frames: np.ndarray, window_fn: str = 'rect',
     return np.abs(np.fft.rfft(frames, axis=1))
 
 
-def _max_normalised(spectra: np.ndarray) -> np.ndarray:
+def max_normalised(*, spectra: np.ndarray) -> np.ndarray:
+    r"""
+    Spectra divided by their maxima, :math:`\hat X_i(k) = X_i(k) / \max_l X_i(l)`.
+
+    Parameters
+    ----------
+    spectra : np.ndarray, shape (n_frames, n_bins)
+        Magnitude spectra.
+
+    Returns
+    -------
+    np.ndarray, shape (n_frames, n_bins), float64
+        Maximum 1 per row; an all-zero spectrum stays all-zero (not 0/0).
+
+    """
+    spectra = np.asarray(spectra, dtype=np.float64)
     peak = spectra.max(axis=1, keepdims=True)
-    # An all-zero spectrum stays all-zero instead of becoming 0/0.
     return spectra / np.where(peak > 0.0, peak, 1.0)
 
 
@@ -98,8 +112,8 @@ def normalised_bin_frequencies(*, n_bins: int, window_length: int) -> np.ndarray
     return 2.0 * np.arange(n_bins, dtype=np.float64) / window_length
 
 
-def spectral_centroid_spread(*, spectra: np.ndarray,
-                             window_length: int) -> tuple[np.ndarray, np.ndarray]:
+def spectral_centroid_spread(*, spectra: np.ndarray, window_length: int,
+                             scaled: bool = False) -> tuple[np.ndarray, np.ndarray]:
     r"""
     Spectral centroid and spread, paper eqs. (2) and (3), normalised by ``Fs/2``.
 
@@ -115,6 +129,8 @@ def spectral_centroid_spread(*, spectra: np.ndarray,
         Magnitude spectra from :func:`magnitude_spectrum`.
     window_length : int
         The DFT length N the spectra came from.
+    scaled : bool
+        ``spectra`` are already :func:`max_normalised` (the same numbers, not divided again).
 
     Returns
     -------
@@ -122,7 +138,7 @@ def spectral_centroid_spread(*, spectra: np.ndarray,
         Both in [0, 1]; multiply by ``Fs/2`` for Hz. 0 for an all-zero spectrum.
 
     """
-    xt = _max_normalised(np.asarray(spectra, dtype=np.float64))
+    xt = np.asarray(spectra, dtype=np.float64) if scaled else max_normalised(spectra=spectra)
     nu = normalised_bin_frequencies(n_bins=xt.shape[1], window_length=window_length)
     den = xt.sum(axis=1) + EPS
     # einsum, not BLAS ``@``: a row's result must not depend on how many rows come with it
@@ -132,7 +148,7 @@ def spectral_centroid_spread(*, spectra: np.ndarray,
     return centroid, spread
 
 
-def sum_normalised(*, spectra: np.ndarray) -> np.ndarray:
+def sum_normalised(*, spectra: np.ndarray, scaled: bool = False) -> np.ndarray:
     r"""
     Sum-normalised spectra :math:`EN_i(k) = \hat X_i(k) / (\sum_l \hat X_i(l) + \epsilon)`.
 
@@ -140,6 +156,8 @@ def sum_normalised(*, spectra: np.ndarray) -> np.ndarray:
     ----------
     spectra : np.ndarray, shape (n_frames, n_bins)
         Magnitude spectra.
+    scaled : bool
+        ``spectra`` are already :func:`max_normalised`.
 
     Returns
     -------
@@ -147,7 +165,7 @@ def sum_normalised(*, spectra: np.ndarray) -> np.ndarray:
         Each row sums to 1 (0 for an all-zero spectrum).
 
     """
-    xt = _max_normalised(np.asarray(spectra, dtype=np.float64))
+    xt = np.asarray(spectra, dtype=np.float64) if scaled else max_normalised(spectra=spectra)
     return xt / (xt.sum(axis=1, keepdims=True) + EPS)
 
 

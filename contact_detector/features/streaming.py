@@ -404,10 +404,19 @@ class ForceTorqueStream:
 
         """
         self.check_stamps(t)
+        values = np.concatenate([force, torque], axis=1)
+        if t.size == 1:
+            # One sample (a live wrench message): the split below without its array calls.
+            if self.last_input_t is not None \
+                    and float(t[0]) - self.last_input_t > self.gap_reset_s:
+                self.restarts += 1
+                self._restart()
+            out = self._push_segment(t, values)
+            self.last_input_t = float(t[0])
+            return out
         # Split where the stamps jump forward by more than the gap: a reset between segments.
         previous = self.last_input_t if self.last_input_t is not None else t[0]
         gaps = np.flatnonzero(np.diff(np.concatenate([[previous], t])) > self.gap_reset_s)
-        values = np.concatenate([force, torque], axis=1)
         bounds = list(gaps) + [t.size]
         out_t, out_f = [], []
         lo = 0
@@ -427,8 +436,11 @@ class ForceTorqueStream:
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.decimation
-        bt = np.concatenate([self._block_t, t])
-        bv = np.concatenate([self._block_v, v])
+        if m == 1:
+            bt, bv = t, v           # no partial block is ever left: nothing to prepend
+        else:
+            bt = np.concatenate([self._block_t, t])
+            bv = np.concatenate([self._block_v, v])
         n_blocks = bt.size // m
         used = n_blocks * m
         self._block_t, self._block_v = bt[used:], bv[used:]
@@ -468,8 +480,11 @@ class ForceTorqueStream:
         frames = np.ascontiguousarray(windows.transpose(2, 0, 1).reshape(2 * m, n))
         spectra = spectral.magnitude_spectrum(frames=frames, window_fn=cfg.ft_window_fn,
                                               detrend=cfg.ft_detrend)
-        centroid, spread = spectral.spectral_centroid_spread(spectra=spectra, window_length=n)
-        en = spectral.sum_normalised(spectra=spectra).reshape(2, m, -1)
+        # Divided by their maxima once for both calls (each would do it again).
+        scaled = spectral.max_normalised(spectra=spectra)
+        centroid, spread = spectral.spectral_centroid_spread(spectra=scaled, window_length=n,
+                                                             scaled=True)
+        en = spectral.sum_normalised(spectra=scaled, scaled=True).reshape(2, m, -1)
         prev = np.empty_like(en)
         prev[:, 1:] = en[:, :-1]
         prev[:, 0] = en[:, 0] if self._prev_en is None else self._prev_en
@@ -677,7 +692,21 @@ class StreamingFeatureExtractor:
             The stamp jumped backwards (nothing is changed; reset and push again).
 
         """
-        unit = to_unit_audio(samples)
+        return self.push_unit_audio(to_unit_audio(samples), stamp=stamp)
+
+    def push_unit_audio(self, unit: np.ndarray, *,
+                        stamp: Optional[float] = None) -> FeatureFrames:
+        """
+        :meth:`push_audio` for a chunk :func:`to_unit_audio` has already returned.
+
+        Parameters
+        ----------
+        unit : np.ndarray, shape (n,), float64
+            Mono audio in [-1, 1], finite (not checked again).
+        stamp : float or None
+            Time of the chunk's last sample, seconds.
+
+        """
         t, power = self.audio.push(unit, stamp=stamp)
         if t.size:
             needs_rel = self._rel_idx is not None or self._peak_idx is not None

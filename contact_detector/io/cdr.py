@@ -1,4 +1,4 @@
-"""Direct readers for the CDR bytes of the two sensor types every recording has.
+"""Direct readers for the CDR bytes of the two sensor types every recording has, and writers.
 
 rosbags deserialises a message through generated Python (~15-30 us per message); offline
 ``detect`` reads ~200 sensor messages per second of recording, so decoding alone would cap it
@@ -11,6 +11,10 @@ Only little-endian plain CDR (encapsulation ``00 01``, what Fast DDS and rosbag2
 read here; anything else returns None and the caller falls back to rosbags.
 
 CDR alignment is relative to the first byte after the 4-byte encapsulation header.
+
+The writers give the bytes of the node's per-frame outputs (``std_msgs/Bool``, ``Float32``),
+which rclpy publishes as they are (``Publisher.publish(bytes)``): no message object to convert
+per frame.
 """
 
 import struct
@@ -23,6 +27,10 @@ CDR_LE = b'\x00\x01'
 _U32 = struct.Struct('<I')
 _STAMP = struct.Struct('<iI')
 _SIX_DOUBLES = struct.Struct('<6d')
+_FLOAT32 = struct.Struct('<4sf')
+#: ``std_msgs/msg/Bool`` with ``data`` True / False (padded to 4 bytes as Fast DDS writes it).
+BOOL_TRUE = CDR_LE + b'\x00\x00\x01\x00\x00\x00'
+BOOL_FALSE = CDR_LE + b'\x00\x00\x00\x00\x00\x00'
 
 
 class Stamp(NamedTuple):
@@ -60,6 +68,16 @@ def read_bool(raw: bytes) -> Optional[Bool]:
     if raw[:2] != CDR_LE or len(raw) < 5:
         return None
     return Bool(raw[4] != 0)
+
+
+def write_float32(value: float) -> bytes:
+    """
+    Return the CDR bytes of a ``std_msgs/msg/Float32`` holding ``value``.
+
+    ``value`` is rounded to the nearest float32 as rclpy does (C ``(float)`` cast); values
+    beyond the float32 range raise OverflowError.
+    """
+    return _FLOAT32.pack(CDR_LE + b'\x00\x00', value)
 
 
 def _align(pos: int, size: int) -> int:

@@ -48,6 +48,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.io.cdr import BOOL_FALSE, BOOL_TRUE, write_float32
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
@@ -180,6 +181,8 @@ class ContactDetectorNode(Node):
 
     def _setup(self, bundle: Optional[ModelBundle]) -> None:
         self.config: NodeConfig = declare_parameters(self)
+        # rcl's clock itself: Clock.now() wraps it in a Time object (~2 us more per read).
+        self._clock_handle = self.get_clock().handle
         cfg = self.config
         self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
         if bundle is None:
@@ -211,7 +214,6 @@ class ContactDetectorNode(Node):
         self._window_start = time.monotonic()
         self._window_counts: Dict[str, int] = {}
 
-        self._contact_msg, self._prob_msg = Bool(), Float32()
         # One second of frames: a reliable subscriber that stalls briefly loses nothing.
         output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                                 reliability=ReliabilityPolicy.RELIABLE)
@@ -280,7 +282,7 @@ class ContactDetectorNode(Node):
     # --- helpers ---------------------------------------------------------------------------------
 
     def _now(self) -> float:
-        return self.get_clock().now().nanoseconds * 1e-9
+        return self._clock_handle.get_now().nanoseconds * 1e-9
 
     def _warn(self, key: str, message: str) -> None:
         suppressed = self._throttle(key, self.config.log_throttle_s)
@@ -316,6 +318,10 @@ class ContactDetectorNode(Node):
                   for name, value in self.detector.counts.items()}
         counts.update(self.counts)
         return counts
+
+    def wrench_wanted(self) -> bool:
+        """Whether an audio frame waits for F/T data (the executor then wakes for wrench)."""
+        return self.detector.extractor.pending > 0
 
     def latency_samples(self, kind: str = 'audio') -> np.ndarray:
         """
@@ -451,12 +457,11 @@ class ContactDetectorNode(Node):
         n = len(decisions)
         if n == 0:
             return
-        contact_msg, prob_msg = self._contact_msg, self._prob_msg
-        for i in range(n):
-            contact_msg.data = bool(decisions.contact[i])
-            prob_msg.data = float(decisions.p[i])
-            self.contact_pub.publish(contact_msg)
-            self.probability_pub.publish(prob_msg)
+        # Serialised bytes: rclpy publishes them as they are (no message conversion per frame).
+        contact_pub, probability_pub = self.contact_pub, self.probability_pub
+        for contact, p in zip(decisions.contact.tolist(), decisions.p.tolist()):
+            contact_pub.publish(BOOL_TRUE if contact else BOOL_FALSE)
+            probability_pub.publish(write_float32(p))
         self.counts['contact_msgs'] += n
         for t in decisions.releases:
             self._release(t)
@@ -640,10 +645,24 @@ class ContactDetectorNode(Node):
 
 
 def make_executor(node: ContactDetectorNode) -> Executor:
-    """Return the executor ``executor.type`` asks for, with ``node`` added."""
-    if node.config.executor_type == 'hot_path':
-        executor = HotPathExecutor(hot=list(node.subscriptions),
-                                   poll_s=node.config.executor_poll_s)
+    """
+    Return the executor ``executor.type`` asks for, with ``node`` added.
+
+    With ``executor.lazy_wrench``, ``hot_path`` wakes up for audio chunks and for wrench
+    messages only while an audio frame waits for F/T data: the wrench messages that arrived
+    meanwhile are taken first at the next wake-up (fewer wake-ups, each costing a cold start;
+    their processing adds to that chunk's latency). They are taken at least every half of the
+    time the wrench queue (``qos.depth``) lasts at ``wrench.rate``. Wrench stamped on receipt
+    (``wrench.stamp_source: receive``) wakes the node at once.
+    """
+    cfg = node.config
+    if cfg.executor_type == 'hot_path':
+        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench
+                and cfg.wrench_stamp_source == 'header' else [])
+        executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
+                                   lazy=lazy, wanted=node.wrench_wanted,
+                                   lazy_max_s=min(cfg.executor_poll_s,
+                                                  0.5 * cfg.qos_depth / cfg.wrench_rate))
     else:
         executor = SingleThreadedExecutor()
     executor.add_node(node)

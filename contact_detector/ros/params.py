@@ -148,6 +148,10 @@ PARAMS: Sequence[ParamSpec] = (
               choices=EXECUTORS),
     ParamSpec('executor.poll_s', 0.05, 'hot_path: longest delay of service, parameter and '
               'timer callbacks, s.', 0.001, 1.0),
+    ParamSpec('executor.lazy_wrench', False, 'hot_path: wrench messages wake the node only '
+              'while an audio frame waits for F/T data; the others are taken with the next '
+              'audio chunk (fewer wake-ups, less CPU; their processing then adds to the '
+              'latency of that chunk). Needs wrench.stamp_source header.'),
     ParamSpec('diagnostics.period_s', 1.0, 'Period of /diagnostics, s.', 0.05, 3600.0,
               read_only=False),
     ParamSpec('log_throttle_s', 2.0, 'Minimum time between two warnings about bad input of '
@@ -194,6 +198,7 @@ class NodeConfig:
     gripper_duration_s: float
     executor_type: str
     executor_poll_s: float
+    executor_lazy_wrench: bool
     diagnostics_period_s: float
     log_throttle_s: float
 
@@ -268,7 +273,7 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         gripper_enabled=v['gripper.enabled'], gripper_topic=v['gripper.topic'].strip(),
         gripper_joint=v['gripper.joint'].strip(), gripper_position=v['gripper.position'],
         gripper_duration_s=v['gripper.duration_s'], executor_type=v['executor.type'],
-        executor_poll_s=v['executor.poll_s'],
+        executor_poll_s=v['executor.poll_s'], executor_lazy_wrench=v['executor.lazy_wrench'],
         diagnostics_period_s=v['diagnostics.period_s'], log_throttle_s=v['log_throttle_s'])
 
 
