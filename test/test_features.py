@@ -334,3 +334,15 @@ def test_config_validation_names_the_field():
     assert FeatureConfig.from_dict(FeatureConfig().to_dict()) == FeatureConfig()
     with pytest.raises(ConfigError, match='unknown'):
         FeatureConfig.from_dict({'bogus': 1})
+
+
+def test_a_config_saved_before_baseline_window_existed_loads_with_the_same_features():
+    # the first-round model files carry no baseline_window: they must load, and compute the
+    # same features as before (the field only affects the *_change features)
+    old = FeatureConfig(ft_window=64, ft_detrend='mean',
+                        extra_features=('force_delta', 'torque_delta')).to_dict()
+    del old['baseline_window']
+    config = FeatureConfig.from_dict(old)
+    assert config.baseline_window == 15
+    assert config.feature_names[-2:] == ('force_delta', 'torque_delta')
+    assert ForceTorqueStream(config=config, input_rate=100.0).history == 64
