@@ -9,6 +9,7 @@ can be compared with :class:`ContactDetector` run offline on the same arrays and
 import importlib.util
 import os
 from pathlib import Path
+import struct
 import subprocess
 import sys
 import time
@@ -23,6 +24,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Int16MultiArray
 from std_srvs.srv import SetBool, Trigger
@@ -516,6 +518,35 @@ def test_float32_audio_with_nan_is_dropped(harness_factory, trial):
     counts = h.node.detector_counts()
     assert counts['audio_dropped'] == 1 and counts['audio_msgs'] == 1
     assert 'NaN' in h.node.detector.last_error
+
+
+def big_endian_wrench(t: float, values) -> bytes:
+    """A WrenchStamped in big-endian CDR (what io.cdr does not read; rclpy does)."""
+    frame = b'wrist_ft_sensor_frame\x00'
+    head = struct.pack('>iII', stamp(t).sec, stamp(t).nanosec, len(frame)) + frame
+    return b'\x00\x00\x00\x00' + head + bytes(-len(head) % 8) + struct.pack('>6d', *values)
+
+
+def test_serialised_input_fallback_and_garbage(harness_factory, trial):
+    h = harness_factory()
+    node = h.node
+    h.set_clock(trial.start_time + 1.0)
+    t = trial.start_time + 0.99
+    node._on_wrench(serialize_message(wrench_msg(t, [1.0, 2.0, 3.0], [0.1, 0.2, 0.3])))
+    assert node.wrench.last_stamp == pytest.approx(t, abs=1e-9)
+    # Bytes io.cdr refuses are read by rclpy: the stamp and the values arrive.
+    node._on_wrench(big_endian_wrench(t + 0.002, [1.0, 2.0, 3.0, 0.1, 0.2, 0.3]))
+    assert node.wrench.last_stamp == pytest.approx(t + 0.002, abs=1e-9)
+    assert node.detector_counts()['wrench_dropped'] == 0
+    node._on_wrench(big_endian_wrench(t + 0.004, [np.nan, 2.0, 3.0, 0.1, 0.2, 0.3]))
+    counts = node.detector_counts()
+    assert counts['wrench_dropped'] == 1 and counts['callback_errors'] == 0
+    # Bytes nothing can read are logged, counted and dropped.
+    node._on_wrench(b'\x00\x01\x00\x00\x01')
+    node._on_audio(b'\x00\x01\x00\x00\x01\x00')
+    counts = node.detector_counts()
+    assert counts['callback_errors'] == 2
+    assert counts['wrench_msgs'] == 3 and counts['audio_msgs'] == 0
 
 
 # --- time ----------------------------------------------------------------------------------------

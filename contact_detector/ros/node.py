@@ -41,6 +41,7 @@ from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedE
 from rclpy.node import Node
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data,
                        ReliabilityPolicy)
+from rclpy.serialization import deserialize_message
 from rcl_interfaces.msg import SetParametersResult
 from std_msgs.msg import Bool, Float32
 from std_srvs.srv import SetBool, Trigger
@@ -48,11 +49,12 @@ from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError, ModelError
-from contact_detector.io.cdr import BOOL_FALSE, BOOL_TRUE, write_float32
+from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, read_multiarray,
+                                     read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
-                                          wrench_to_arrays)
+                                          stamp_to_seconds, wrench_to_arrays)
 from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
@@ -66,6 +68,9 @@ OUTPUT_DEPTH = 100
 #: Processing latencies kept for :meth:`ContactDetectorNode.latency_samples`.
 LATENCY_HISTORY = 100_000
 
+#: Audio types taken as serialised bytes and read by :mod:`contact_detector.io.cdr`.
+RAW_AUDIO_DTYPES = {'std_msgs/msg/Int16MultiArray': np.int16,
+                    'std_msgs/msg/Float32MultiArray': np.float32}
 NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
                  'callback_errors', 'detector_rebuilds', 'contact_msgs', 'release_msgs')
 _NUMBERS = re.compile(r'[-+]?\d+(\.\d+)?(e[-+]?\d+)?')
@@ -230,10 +235,15 @@ class ContactDetectorNode(Node):
             reliability=(ReliabilityPolicy.RELIABLE if cfg.qos_reliability == 'reliable'
                          else ReliabilityPolicy.BEST_EFFORT),
             durability=qos_profile_sensor_data.durability)
+        # Serialised bytes, read by io.cdr (rclpy's deserialisation for anything it refuses):
+        # no message object per input message.
+        self._audio_class = audio_class
+        self._raw_audio_dtype = RAW_AUDIO_DTYPES.get(cfg.audio_msg_type)
         self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
-                                                   self._on_wrench, input_qos)
-        self.audio_sub = self.create_subscription(audio_class, 'audio', self._on_audio,
-                                                  input_qos)
+                                                   self._on_wrench, input_qos, raw=True)
+        self.audio_sub = self.create_subscription(
+            audio_class, 'audio', self._on_audio, input_qos,
+            raw=self._raw_audio_dtype is not None)
         self.info_sub = None
         if info_class is not None:
             info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
@@ -338,6 +348,10 @@ class ContactDetectorNode(Node):
         entry = time.perf_counter()
         try:
             now = self._now()
+            if isinstance(msg, bytes):
+                fast = read_multiarray(msg, dtype=self._raw_audio_dtype)
+                msg = (fast if fast is not None
+                       else deserialize_message(msg, self._audio_class))
             self._receive_audio(msg, now, entry)
         except Exception as err:  # a callback must never raise
             self._callback_failed('audio', err)
@@ -393,6 +407,9 @@ class ContactDetectorNode(Node):
         entry = time.perf_counter()
         try:
             now = self._now()
+            if isinstance(msg, bytes):
+                fast = read_wrench_stamped(msg)
+                msg = fast if fast is not None else deserialize_message(msg, WrenchStamped)
             self._receive_wrench(msg, now, entry)
         except Exception as err:  # a callback must never raise
             self._callback_failed('wrench', err)
@@ -403,7 +420,12 @@ class ContactDetectorNode(Node):
         stream.received += 1
         stream.window_msgs += 1
         try:
-            t, force, torque = wrench_to_arrays(msg)
+            if isinstance(msg, tuple):      # (stamp, six values) from io.cdr
+                stamp, values = msg
+                t = np.array([stamp_to_seconds(stamp)])
+                force, torque = np.array([values[:3]]), np.array([values[3:]])
+            else:
+                t, force, torque = wrench_to_arrays(msg)
             if self.config.wrench_stamp_source == 'receive':
                 t = np.array([now])
             else:
