@@ -495,82 +495,85 @@ class ForceTorqueStream:
         out[:, 0], out[:, 1], out[:, 2] = centroid[:m], spread[:m], flux[:m]
         out[:, 3], out[:, 4], out[:, 5] = centroid[m:], spread[m:], flux[m:]
         derived = {}
-        if {'force_delta', 'torque_delta', 'ft_delta_angle'} & set(self.use_delta):
-            f, t = (delta_feature(signal=self._mag[:, k], ends=ends, window=cfg.delta_window,
-                                  lag=cfg.delta_lag) for k in (0, 1))
-            derived.update(force_delta=f, torque_delta=t,
-                           ft_delta_angle=delta_angle(force_delta=f, torque_delta=t))
-        if {'force_change', 'torque_change', 'ft_change_angle'} & set(self.use_delta):
-            f, t = (change_feature(signal=self._mag[:, k], ends=ends, window=cfg.delta_window,
-                                   baseline=cfg.baseline_window, lag=cfg.delta_lag)
-                    for k in (0, 1))
-            derived.update(force_change=f, torque_change=t,
-                           ft_change_angle=delta_angle(force_delta=f, torque_delta=t))
+        if self.use_delta:
+            # |F| and |T| side by side; the newest samples' mean serves both families
+            recent = window_mean(signal=self._mag, ends=ends, window=cfg.delta_window)
+            lagged, wanted = ends - cfg.delta_lag, set(self.use_delta)
+            if wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'}:
+                change = recent - window_mean(signal=self._mag, ends=lagged,
+                                              window=cfg.delta_window)
+                derived.update(_with_angle(('force_delta', 'torque_delta', 'ft_delta_angle'),
+                                           change))
+            if wanted & {'force_change', 'torque_change', 'ft_change_angle'}:
+                change = recent - window_median(signal=self._mag, ends=lagged,
+                                                window=cfg.baseline_window)
+                derived.update(_with_angle(('force_change', 'torque_change', 'ft_change_angle'),
+                                           change))
         for col, name in enumerate(self.use_delta, start=6):
             out[:, col] = derived[name]
         return out
 
 
-def delta_feature(*, signal: np.ndarray, ends: np.ndarray, window: int, lag: int) -> np.ndarray:
+def _with_angle(names: tuple, change: np.ndarray) -> dict:
+    """Name the |F| and |T| columns of ``change`` (m, 2) and their :func:`delta_angle`."""
+    f, t = change[:, 0], change[:, 1]
+    return dict(zip(names, (f, t, delta_angle(force_delta=f, torque_delta=t))))
+
+
+def window_mean(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
     """
-    Change of a magnitude signal: ``mean(s[e-w+1..e]) - mean(s[e-lag-w+1..e-lag])``.
+    Mean of the ``window`` samples ending at each of ``ends``: ``mean(s[e-w+1..e])``.
+
+    ``*_delta = window_mean(ends) - window_mean(ends - delta_lag)`` and
+    ``*_change = window_mean(ends) - window_median(ends - delta_lag)``.
 
     Parameters
     ----------
-    signal : np.ndarray, shape (n,)
-        |F| in N or |T| in N m.
+    signal : np.ndarray, shape (n,) or (n, c)
+        |F| in N and/or |T| in N m, one column each.
     ends : np.ndarray, shape (m,)
-        Indices of the newest sample of each frame, ``>= lag + window - 1``.
-    window, lag : int
-        Samples averaged, and distance between the two averages.
+        Indices of the newest sample of each window, ``>= window - 1``.
+    window : int
+        Samples averaged.
 
     Returns
     -------
-    np.ndarray, shape (m,)
+    np.ndarray, shape (m,) or (m, c)
         Same unit as ``signal``.
 
     """
-    offsets = np.arange(1 - window, 1)
-    new = signal[ends[:, None] + offsets].mean(axis=1)
-    old = signal[(ends - lag)[:, None] + offsets].mean(axis=1)
-    return new - old
+    return signal[ends[:, None] + np.arange(1 - window, 1)].mean(axis=1)
 
 
-def change_feature(*, signal: np.ndarray, ends: np.ndarray, window: int, baseline: int,
-                   lag: int) -> np.ndarray:
+def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
     """
-    Change of a magnitude signal against a robust baseline.
+    Median of the ``window`` samples ending at each of ``ends`` (a robust baseline).
 
-    ``mean(s[e-w+1..e]) - median(s[e-lag-b+1..e-lag])``: a knock shorter than half the
-    baseline does not move the median, so it is not seen again, with the opposite sign, when it
-    leaves the baseline (as it is by :func:`delta_feature` ``lag`` samples later).
+    A knock shorter than half the window does not move it, so the ``*_change`` features do not
+    see a knock again, with the opposite sign, when it leaves their baseline (as ``*_delta``
+    does ``delta_lag`` samples later).
 
     Parameters
     ----------
-    signal : np.ndarray, shape (n,)
-        |F| in N or |T| in N m.
+    signal : np.ndarray, shape (n,) or (n, c)
+        |F| in N and/or |T| in N m, one column each.
     ends : np.ndarray, shape (m,)
-        Indices of the newest sample of each frame, ``>= lag + max(window, baseline) - 1``.
-    window, baseline, lag : int
-        Samples averaged, samples in the baseline, and distance from the newest sample to the
-        baseline's newest.
+        Indices of the newest sample of each window, ``>= window - 1``.
+    window : int
+        Samples in the median.
 
     Returns
     -------
-    np.ndarray, shape (m,)
-        Same unit as ``signal``.
+    np.ndarray, shape (m,) or (m, c)
+        ``np.median``'s values, from one partition (``np.median`` costs ~3x as much per call).
 
     """
-    new = signal[ends[:, None] + np.arange(1 - window, 1)].mean(axis=1)
-    old = signal[(ends - lag)[:, None] + np.arange(1 - baseline, 1)]
-    # np.median's value, from one partition (np.median itself costs ~3x as much per call)
-    k = baseline // 2
-    if baseline % 2:
-        base = np.partition(old, k, axis=1)[:, k]
-    else:
-        part = np.partition(old, (k - 1, k), axis=1)
-        base = (part[:, k - 1] + part[:, k]) / 2
-    return new - base
+    old = signal[ends[:, None] + np.arange(1 - window, 1)]
+    k = window // 2
+    if window % 2:
+        return np.partition(old, k, axis=1)[:, k]
+    part = np.partition(old, (k - 1, k), axis=1)
+    return (part[:, k - 1] + part[:, k]) / 2
 
 
 def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:
@@ -586,7 +589,7 @@ def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndar
     Parameters
     ----------
     force_delta : np.ndarray, shape (m,)
-        Change of |F| (:func:`delta_feature`), N.
+        Change of |F| (``force_delta`` or ``force_change``), N.
     torque_delta : np.ndarray, shape (m,)
         Change of |T| over the same samples, N m.
 

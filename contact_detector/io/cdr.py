@@ -149,3 +149,21 @@ def read_multiarray(raw: bytes, *, dtype: np.dtype) -> Optional[MultiArray]:
         return None
     data = np.frombuffer(raw, dtype=dtype, count=count, offset=start)
     return MultiArray(layout=Layout(dim=(None,) * n_dims, data_offset=data_offset), data=data)
+
+
+def _int16_multiarray(raw: bytes) -> Optional[MultiArray]:
+    return read_multiarray(raw, dtype=np.int16)
+
+
+def _float32_multiarray(raw: bytes) -> Optional[MultiArray]:
+    return read_multiarray(raw, dtype=np.float32)
+
+
+#: The readers by message type (values identical to rosbags', test_cdr.py): bag decoding and
+#: the node's raw subscriptions use them, with the generic deserialiser as fallback.
+FAST_DECODERS = {
+    'geometry_msgs/msg/WrenchStamped': read_wrench_stamped,
+    'std_msgs/msg/Int16MultiArray': _int16_multiarray,
+    'std_msgs/msg/Float32MultiArray': _float32_multiarray,
+    'std_msgs/msg/Bool': read_bool,
+}

@@ -153,7 +153,9 @@ def stamp_to_seconds(stamp: Any) -> float:
 
 def wrench_to_arrays(msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
-    Read a ``geometry_msgs/WrenchStamped``.
+    Read a ``geometry_msgs/WrenchStamped`` (or what ``cdr.read_wrench_stamped`` gives).
+
+    The CDR reader's ``(stamp, six values)`` tuple is read directly.
 
     Returns
     -------
@@ -170,6 +172,10 @@ def wrench_to_arrays(msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         Missing or non-numeric fields. (NaN/Inf and stamp order are checked by the core.)
 
     """
+    if isinstance(msg, tuple):          # from cdr.read_wrench_stamped
+        stamp, values = msg
+        return (np.array([stamp_to_seconds(stamp)]), np.array([values[:3]]),
+                np.array([values[3:]]))
     t = stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
     wrench = _field(msg, 'wrench')
     try:

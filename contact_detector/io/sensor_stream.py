@@ -16,8 +16,7 @@ import numpy as np
 from contact_detector.errors import BagError, InputError
 from contact_detector.io import cdr
 from contact_detector.io.bags import iter_messages
-from contact_detector.io.messages import (audio_stamp, audio_to_samples, stamp_to_seconds,
-                                          wrench_to_arrays)
+from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
 
 DEFAULT_AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
 
@@ -88,33 +87,8 @@ class BadEvent:
 Event = Union[AudioEvent, WrenchEvent, TruthEvent, BadEvent]
 
 
-def _fast_wrench(raw: bytes):
-    return cdr.read_wrench_stamped(raw)
-
-
-def _fast_int16(raw: bytes):
-    return cdr.read_multiarray(raw, dtype=np.int16)
-
-
-def _fast_float32(raw: bytes):
-    return cdr.read_multiarray(raw, dtype=np.float32)
-
-
-#: CDR readers for the common sensor types; values identical to rosbags' (test_cdr.py).
-FAST_DECODERS = {
-    'geometry_msgs/msg/WrenchStamped': _fast_wrench,
-    'std_msgs/msg/Int16MultiArray': _fast_int16,
-    'std_msgs/msg/Float32MultiArray': _fast_float32,
-    'std_msgs/msg/Bool': cdr.read_bool,
-}
-
-
-def _wrench_arrays(msg) -> tuple:
-    if isinstance(msg, tuple):          # from cdr.read_wrench_stamped
-        stamp, values = msg
-        return (np.array([stamp_to_seconds(stamp)]), np.array([values[:3]]),
-                np.array([values[3:]]))
-    return wrench_to_arrays(msg)
+#: CDR readers for the common sensor types (:data:`contact_detector.io.cdr.FAST_DECODERS`).
+FAST_DECODERS = cdr.FAST_DECODERS
 
 
 def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Event]:
@@ -148,7 +122,7 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
                            f'type is set to {spec.audio_msg_type} (audio.msg_type)')
         try:
             if message.topic == spec.wrench_topic:
-                t, force, torque = _wrench_arrays(message.msg)
+                t, force, torque = wrench_to_arrays(message.msg)
                 yield WrenchEvent(t=t, force=force, torque=torque, now=now)
             elif message.topic == spec.audio_topic:
                 msg_type = spec.audio_msg_type or message.msgtype

@@ -49,12 +49,12 @@ from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError, ModelError
-from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, read_multiarray,
+from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
-                                          stamp_to_seconds, wrench_to_arrays)
+                                          wrench_to_arrays)
 from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
@@ -68,9 +68,6 @@ OUTPUT_DEPTH = 100
 #: Processing latencies kept for :meth:`ContactDetectorNode.latency_samples`.
 LATENCY_HISTORY = 100_000
 
-#: Audio types taken as serialised bytes and read by :mod:`contact_detector.io.cdr`.
-RAW_AUDIO_DTYPES = {'std_msgs/msg/Int16MultiArray': np.int16,
-                    'std_msgs/msg/Float32MultiArray': np.float32}
 NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
                  'callback_errors', 'detector_rebuilds', 'contact_msgs', 'release_msgs')
 _NUMBERS = re.compile(r'[-+]?\d+(\.\d+)?(e[-+]?\d+)?')
@@ -238,12 +235,12 @@ class ContactDetectorNode(Node):
         # Serialised bytes, read by io.cdr (rclpy's deserialisation for anything it refuses):
         # no message object per input message.
         self._audio_class = audio_class
-        self._raw_audio_dtype = RAW_AUDIO_DTYPES.get(cfg.audio_msg_type)
+        self._read_audio = FAST_DECODERS.get(cfg.audio_msg_type)
         self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
                                                    self._on_wrench, input_qos, raw=True)
         self.audio_sub = self.create_subscription(
             audio_class, 'audio', self._on_audio, input_qos,
-            raw=self._raw_audio_dtype is not None)
+            raw=self._read_audio is not None)
         self.info_sub = None
         if info_class is not None:
             info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
@@ -349,7 +346,7 @@ class ContactDetectorNode(Node):
         try:
             now = self._now()
             if isinstance(msg, bytes):
-                fast = read_multiarray(msg, dtype=self._raw_audio_dtype)
+                fast = self._read_audio(msg)
                 msg = (fast if fast is not None
                        else deserialize_message(msg, self._audio_class))
             self._receive_audio(msg, now, entry)
@@ -420,12 +417,7 @@ class ContactDetectorNode(Node):
         stream.received += 1
         stream.window_msgs += 1
         try:
-            if isinstance(msg, tuple):      # (stamp, six values) from io.cdr
-                stamp, values = msg
-                t = np.array([stamp_to_seconds(stamp)])
-                force, torque = np.array([values[:3]]), np.array([values[3:]])
-            else:
-                t, force, torque = wrench_to_arrays(msg)
+            t, force, torque = wrench_to_arrays(msg)
             if self.config.wrench_stamp_source == 'receive':
                 t = np.array([now])
             else:
