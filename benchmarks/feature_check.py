@@ -1,25 +1,31 @@
-"""Compare extra-feature sets and release rules over several forest seeds.
+"""Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
 
 A 10-tree forest is a noisy estimator: the same recipe trained with another random seed moves
 the count of premature releases on 360 held-out trials by several, so one trained forest cannot
-tell two feature sets apart. This script computes every feature once (the shipped
-configuration, which includes all the extras), then for each feature subset and each seed trains
-the paper's forest (10 trees, ``max_features='sqrt'``) on all training trials and scores the
-rules on the held-out folders, summed over the seeds. It is how the extras and the rule in
-docs/sweep.md were chosen.
+tell two feature sets apart. For each feature setting and each seed this script trains the
+paper's forest (10 trees, ``max_features='sqrt'``) on all training trials and scores the rules
+on the held-out folders, summed over the seeds. It is how the extras, the change windows and
+the rule in docs/sweep.md were chosen.
+
+``--compare features`` (round 2): subsets of the eight extras with round 2's change windows,
+features computed once.
+``--compare deltas`` (round 3): the shipped features with other ``delta_window`` /
+``delta_lag`` (the F/T change is the newest ``delta_window`` samples against the samples
+``delta_lag`` earlier), features computed once per setting.
 
     python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
-        data/heldout55 --seeds 0,1,2,3 --jobs 2
+        data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
 """
 
 import argparse
+from dataclasses import replace
 from typing import Dict, List
 
 import numpy as np
 
 from contact_detector.cli.sweep import decode
 from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS, DEFAULT_RULE
-from contact_detector.features.config import PAPER_FEATURES
+from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.bundle import DecisionRule
@@ -28,12 +34,16 @@ from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_fo
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
+#: The release rule's fast path without unanimity: 9 of the 10 trees.
+FAST_RULE = replace(DEFAULT_RULE, threshold=0.9)
+#: Round 2's change windows (round 3 shortened them); ``--compare features`` reproduces round 2.
+ROUND2 = replace(DEFAULT_FEATURES, delta_window=3, delta_lag=10)
 
 
-def settings() -> List[FeatureSetting]:
-    """Feature subsets of the shipped configuration, named by what they add."""
+def feature_settings() -> List[FeatureSetting]:
+    """Feature subsets of round 2's configuration, named by what they add."""
     def subset(name: str, extras: tuple) -> FeatureSetting:
-        return FeatureSetting(name, DEFAULT_FEATURES, DEFAULT_LABELS,
+        return FeatureSetting(name, ROUND2, DEFAULT_LABELS,
                               columns=PAPER_FEATURES + extras)
     return [
         subset('four extras (the previous default)', BEFORE),
@@ -43,13 +53,58 @@ def settings() -> List[FeatureSetting]:
     ]
 
 
-def rules() -> List[DecisionRule]:
-    """The previous default, the shipped rule and its faster and stricter neighbours."""
+def feature_rules() -> List[DecisionRule]:
+    """The round-1 default, the shipped rule and its faster and stricter neighbours."""
     slow = {'sustain_frames': 15, 'sustain_threshold': 0.5}
     return [DecisionRule(threshold=0.7, confirm_frames=2),
             DecisionRule(threshold=0.85, **slow),
             DecisionRule(threshold=0.95),
             DEFAULT_RULE]
+
+
+def delta_configs() -> List[tuple]:
+    """(name, config): the round-2 windows, the shipped ones and their neighbours."""
+    def windows(window: int, lag: int) -> FeatureConfig:
+        return replace(DEFAULT_FEATURES, delta_window=window, delta_lag=lag)
+    return [('delta_window 3, delta_lag 10 (round 2)', windows(3, 10)),
+            ('delta_window 2, delta_lag 10', windows(2, 10)),
+            ('delta_window 1, delta_lag 10', windows(1, 10)),
+            ('delta_window 1, delta_lag 5 (shipped)', windows(1, 5)),
+            ('delta_window 1, delta_lag 3', windows(1, 3))]
+
+
+def _frames(folders: List[str], config: FeatureConfig, jobs: int) -> list:
+    spec = StreamSpec()
+    frames = {}
+    for k, folder in enumerate(folders):
+        frames.update(compute_frames(
+            events_by_trial=decode(find_bags([folder]), spec, f'set{k}'), config=config,
+            audio_rate=16000.0, wrench_rate=100.0, jobs=jobs))
+    return list(frames.values())
+
+
+def _rows(setting: FeatureSetting, train: list, heldout: list, rules: List[DecisionRule],
+          seeds: List[int], jobs: int) -> None:
+    totals: Dict[str, dict] = {}
+    for seed in seeds:
+        forest = fit_forest(frames=train, setting=setting, n_estimators=10, seed=seed,
+                            jobs=jobs)
+        for row in score_rules(forest=forest, frames=heldout, setting=setting, rules=rules):
+            s = row.summary
+            t = totals.setdefault(row.rule, {'detected': 0, 'trials': 0, 'miss': 0,
+                                             'premature': 0, 'impact': 0, 'medians': []})
+            t['detected'] += s['detected']
+            t['trials'] += s['trials']
+            t['miss'] += s['missed'] + s['late']
+            t['premature'] += s['premature']
+            t['impact'] += s['impact_events']
+            if s['latency_ms_median'] is not None:
+                t['medians'].append(s['latency_ms_median'])
+    for rule, t in totals.items():
+        m = np.array(t['medians'])
+        latency = f'{np.median(m):.0f} ({m.min():.0f}-{m.max():.0f})' if m.size else '-'
+        print(f"| {setting.name} | {rule} | {t['detected']}/{t['trials']} | {t['miss']} | "
+              f"{t['premature']} | {t['impact']} | {latency} |", flush=True)
 
 
 def main() -> int:
@@ -60,46 +115,25 @@ def main() -> int:
     parser.add_argument('heldout', nargs='+', help='held-out folders')
     parser.add_argument('--seeds', default='0,1,2,3', help='forest seeds, comma-separated')
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--compare', choices=('features', 'deltas'), default='features')
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(',')]
-    spec = StreamSpec()
-    train = compute_frames(events_by_trial=decode(find_bags([args.train]), spec, 'train'),
-                           config=DEFAULT_FEATURES, audio_rate=16000.0, wrench_rate=100.0,
-                           jobs=args.jobs)
-    heldout = {}
-    for k, folder in enumerate(args.heldout):
-        heldout.update(compute_frames(
-            events_by_trial=decode(find_bags([folder]), spec, f'heldout{k}'),
-            config=DEFAULT_FEATURES, audio_rate=16000.0, wrench_rate=100.0, jobs=args.jobs))
-    train_frames, heldout_frames = list(train.values()), list(heldout.values())
-    print(f'{len(train_frames)} training trials, {len(heldout_frames)} held-out trials, '
-          f'forest seeds {seeds}; sums over the seeds, latency = median of the per-seed '
+    print(f'forest seeds {seeds}; sums over the seeds, latency = median of the per-seed '
           'medians (range)\n')
     print('| features | rule | detected | missed+late | premature | impact events | '
           'latency median [ms] |')
     print('|---|---|---|---|---|---|---|')
-    for setting in settings():
-        totals: Dict[str, dict] = {}
-        for seed in seeds:
-            forest = fit_forest(frames=train_frames, setting=setting, n_estimators=10,
-                                seed=seed, jobs=args.jobs)
-            for row in score_rules(forest=forest, frames=heldout_frames, setting=setting,
-                                   rules=rules()):
-                s = row.summary
-                t = totals.setdefault(row.rule, {'detected': 0, 'trials': 0, 'miss': 0,
-                                                 'premature': 0, 'impact': 0, 'medians': []})
-                t['detected'] += s['detected']
-                t['trials'] += s['trials']
-                t['miss'] += s['missed'] + s['late']
-                t['premature'] += s['premature']
-                t['impact'] += s['impact_events']
-                if s['latency_ms_median'] is not None:
-                    t['medians'].append(s['latency_ms_median'])
-        for rule, t in totals.items():
-            m = np.array(t['medians'])
-            latency = (f'{np.median(m):.0f} ({m.min():.0f}-{m.max():.0f})' if m.size else '-')
-            print(f"| {setting.name} | {rule} | {t['detected']}/{t['trials']} | {t['miss']} | "
-                  f"{t['premature']} | {t['impact']} | {latency} |", flush=True)
+    if args.compare == 'features':
+        train = _frames([args.train], ROUND2, args.jobs)
+        heldout = _frames(args.heldout, ROUND2, args.jobs)
+        for setting in feature_settings():
+            _rows(setting, train, heldout, feature_rules(), seeds, args.jobs)
+        return 0
+    for name, config in delta_configs():
+        setting = FeatureSetting(name, config, DEFAULT_LABELS)
+        _rows(setting, _frames([args.train], config, args.jobs),
+              _frames(args.heldout, config, args.jobs), [DEFAULT_RULE, FAST_RULE], seeds,
+              args.jobs)
     return 0
 
 

@@ -518,8 +518,13 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
     assert train_cli.main([str(data['bags']), '--no-events', '--jobs', '1', '--trees', '2,4-5',
                            '--threshold', '0.85', '--confirm-frames', '1',
                            '--sustain-frames', '10', '--sustain-threshold', '0.4',
+                           '--delta-window', '2', '--delta-lag', '4', '--baseline-window', '9',
                            '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
+    # Without options, train uses the shipped features; the F/T change windows are options.
+    assert data['bundle'].feature_config == train_cli.DEFAULT_FEATURES
+    assert (bundle.feature_config.delta_window, bundle.feature_config.delta_lag,
+            bundle.feature_config.baseline_window) == (2, 4, 9)
     table = bundle.metrics['trial']['validation']
     assert [row['n_estimators'] for row in table] == [2, 4, 5]
     assert bundle.forest.n_estimators == bundle.metrics['trial']['best_n_estimators']

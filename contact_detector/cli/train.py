@@ -38,6 +38,7 @@ from contact_detector.model.training import (LabelWindow, read_labels_csv, run_s
 #: trees), or when the mean P(contact) of the last 15 frames reaches 0.5 (quiet contacts). The
 #: paper's settings (W160/H128, 7 features, 0.1 s labels) are one row of that table.
 DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
+                                 delta_window=1, delta_lag=5,
                                  extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
                                                  'force_delta', 'torque_delta',
                                                  'ft_delta_angle', 'force_change',
@@ -57,6 +58,15 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--ft-detrend', choices=('none', 'mean'), default=d.ft_detrend,
                         help=f"remove each F/T window's mean (default {d.ft_detrend})")
     parser.add_argument('--ft-window-fn', choices=('rect', 'hann'), default=d.ft_window_fn)
+    parser.add_argument('--delta-window', type=int, default=d.delta_window,
+                        help='F/T change features: newest samples averaged '
+                             f'(default {d.delta_window})')
+    parser.add_argument('--delta-lag', type=int, default=d.delta_lag,
+                        help='F/T change features: samples back to the reference '
+                             f'(default {d.delta_lag})')
+    parser.add_argument('--baseline-window', type=int, default=d.baseline_window,
+                        help='samples in the median baseline of the *_change features '
+                             f'(default {d.baseline_window})')
     parser.add_argument('--extra-features', default=','.join(d.extra_features),
                         help='comma-separated extra features, from '
                              f"{', '.join(EXTRA_FEATURES)}")
@@ -103,7 +113,8 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     extra = tuple(e for e in args.extra_features.split(',') if e)
     return FeatureConfig(ft_window=args.ft_window, ft_hop=args.ft_hop,
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
-                         extra_features=extra)
+                         delta_window=args.delta_window, delta_lag=args.delta_lag,
+                         baseline_window=args.baseline_window, extra_features=extra)
 
 
 def conditions_of(bags: Sequence[Path]) -> dict:
