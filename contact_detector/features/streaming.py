@@ -16,6 +16,7 @@ stamps, bag log times); nothing here reads a clock. The batch reference in
 :mod:`contact_detector.features.batch` computes the same numbers without any streaming logic.
 """
 
+from bisect import bisect_left
 from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
@@ -344,24 +345,28 @@ class AudioFramer:
             self._update_anchor(n, stamp)
         self._buf = np.concatenate([self._buf, samples]) if self._buf.size else samples
         self._n_total += n
-        w = self.frame_length
+        w, hop = self.frame_length, self.hop
         # Frames i with e_i <= n_total: i <= (n_total - w + 0.5) / hop, checked exactly below.
-        upper = int(math.floor((self._n_total - w + 0.5) / self.hop)) + 2 - self._next_frame
-        if upper > 0:
-            ends = frame_ends(first=self._next_frame, count=upper, frame_length=w, hop=self.hop)
-            ends = ends[ends <= self._n_total]
-        else:
-            ends = np.zeros(0, dtype=np.int64)
-        if ends.size:
+        # frame_ends() in Python numbers (a few frames per chunk): the same IEEE operations.
+        first = self._next_frame
+        upper = int(math.floor((self._n_total - w + 0.5) / hop)) + 2 - first
+        ends = [e for e in (w + math.floor(i * hop + 0.5) for i in range(first, first + upper))
+                if e <= self._n_total]
+        if len(ends) == 1:
+            start = ends[0] - w - self._buf_start
+            # A copy, as the fancy index below makes: the sum must not see another alignment.
+            power = spectral.audio_power(frames=self._buf[start:start + w].reshape(1, w).copy())
+            t = np.array([self._anchor + (ends[0] - 1) / self.sample_rate])
+        elif ends:
+            ends = np.array(ends)
             starts = ends - w - self._buf_start
             windows = self._buf[starts[:, None] + self._offsets]
             power = spectral.audio_power(frames=windows)
             t = self._anchor + (ends - 1) / self.sample_rate
-            self._next_frame += ends.size
         else:
             power, t = np.zeros(0), np.zeros(0)
-        next_start = int(frame_ends(first=self._next_frame, count=1, frame_length=w,
-                                    hop=self.hop)[0]) - w
+        self._next_frame += len(ends)
+        next_start = math.floor(self._next_frame * hop + 0.5)
         keep_from = min(max(next_start, self._buf_start), self._n_total)
         self._buf = self._buf[keep_from - self._buf_start:]
         self._buf_start = keep_from
@@ -888,15 +893,16 @@ class StreamingFeatureExtractor:
         self._ft_xs.clear()
         self._ft_t = self._ft_ts.view       # times of the F/T feature frames kept
         self._ft_x = self._ft_xs.view       # and their features
-        self._pend_t = np.zeros(0)
-        self._pend_a = np.zeros((0, 3))     # power, dB above floor, recent peak of that
-        self._pend_arrival = np.zeros(0)
-        self._rel_hist = np.full(self.config.peak_frames - 1, -np.inf)
+        # Frames waiting for F/T, in Python numbers (one or two at a time live).
+        self._pend_t: list = []             # end times
+        self._pend_a: list = []             # (power, dB above floor, recent peak of that)
+        self._pend_arrival: list = []       # audio time of the chunk that completed them
+        self._rel_hist = [-math.inf] * (self.config.peak_frames - 1)
 
     @property
     def pending(self) -> int:
         """Audio frames waiting for F/T."""
-        return int(self._pend_t.size)
+        return len(self._pend_t)
 
     def push_audio(self, samples: np.ndarray, *, stamp: Optional[float] = None) -> FeatureFrames:
         """
@@ -937,19 +943,26 @@ class StreamingFeatureExtractor:
             needs_rel = self._rel_idx is not None or self._peak_idx is not None
             rel = (spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
                    if needs_rel else np.zeros_like(power))
-            peak = self._recent_peak(rel) if self._peak_idx is not None else rel
-            arrival = self.audio.latest_time
-            self._pend_t = np.concatenate([self._pend_t, t])
-            self._pend_a = np.concatenate([self._pend_a, np.stack([power, rel, peak], axis=1)])
-            self._pend_arrival = np.concatenate([self._pend_arrival,
-                                                 np.full(t.size, arrival)])
+            rel_values = rel.tolist()
+            if self._peak_idx is None:
+                peak = rel_values
+            elif t.size == 1:
+                # _recent_peak for one frame in Python floats (max picks one of the values)
+                history = self._rel_hist + rel_values
+                self._rel_hist = history[1:]
+                peak = [max(history)]
+            else:
+                peak = self._recent_peak(rel).tolist()
+            self._pend_t.extend(t.tolist())
+            self._pend_a.extend(zip(power.tolist(), rel_values, peak))
+            self._pend_arrival.extend([self.audio.latest_time] * t.size)
         return self._drain(force=False)
 
     def _recent_peak(self, rel: np.ndarray) -> np.ndarray:
         # Running maximum over the newest peak_frames values, across chunk boundaries.
         k = self.config.peak_frames
         history = np.concatenate([self._rel_hist, rel])
-        self._rel_hist = history[history.size - (k - 1):] if k > 1 else history[:0]
+        self._rel_hist = history[history.size - (k - 1):].tolist() if k > 1 else []
         return history[np.arange(rel.size)[:, None] + np.arange(k)].max(axis=1)
 
     def push_wrench(self, *, t: np.ndarray, force: np.ndarray,
@@ -1041,26 +1054,28 @@ class StreamingFeatureExtractor:
         return self._drain(force=True)
 
     def _drain(self, *, force: bool) -> FeatureFrames:
-        n = self._pend_t.size
+        n = len(self._pend_t)
         if n == 0:
             return self._empty
         if force:
             count = n
         else:
+            # bisect_left is np.searchsorted(side='left'): the same binary search
             last = self.ft.last_input_t
-            ready = 0 if last is None else int(
-                np.searchsorted(self._pend_t, last + self.ready_margin_s, side='left'))
+            ready = 0 if last is None else bisect_left(self._pend_t, last + self.ready_margin_s)
             latest = self.audio.latest_time
-            timed_out = 0 if latest is None else int(np.searchsorted(
-                self._pend_arrival, latest - self.max_ft_wait_s, side='left'))
+            timed_out = 0 if latest is None else bisect_left(self._pend_arrival,
+                                                             latest - self.max_ft_wait_s)
             count = max(ready, timed_out)
         if count == 0:
             return self._empty
         t = self._pend_t[:count]
         audio = self._pend_a[:count]
-        self._pend_t = self._pend_t[count:]
-        self._pend_a = self._pend_a[count:]
-        self._pend_arrival = self._pend_arrival[count:]
+        del self._pend_t[:count], self._pend_a[:count], self._pend_arrival[:count]
+        if count == 1:
+            return self._aligned_one(t[0], audio[0])
+        t = np.array(t)
+        audio = np.array(audio)
         x = np.zeros((count, len(self.names)))
         x[:, 0] = audio[:, 0]
         if self._rel_idx is not None:
@@ -1074,3 +1089,19 @@ class StreamingFeatureExtractor:
             rows = np.flatnonzero(valid)[:, None]
             x[rows, self._ft_dst] = self._ft_x[idx[valid]][:, self._ft_col]
         return FeatureFrames(t=t, x=x, valid=valid, names=self.names)
+
+    def _aligned_one(self, t: float, audio: tuple) -> FeatureFrames:
+        # _drain's alignment for one frame, in Python numbers.
+        x = np.zeros((1, len(self.names)))
+        row = x[0]
+        row[0] = audio[0]
+        if self._rel_idx is not None:
+            row[self._rel_idx] = audio[1]
+        if self._peak_idx is not None:
+            row[self._peak_idx] = audio[2]
+        ft_t = self._ft_t
+        idx = int(np.searchsorted(ft_t, t, side='right')) - 1
+        valid = idx >= 0 and t - float(ft_t[idx]) <= self.max_ft_age_s
+        if valid:
+            row[self._ft_dst] = self._ft_x[idx, self._ft_col]
+        return FeatureFrames(t=np.array([t]), x=x, valid=np.array([valid]), names=self.names)
