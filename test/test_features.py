@@ -1,5 +1,7 @@
 """Feature core on synthetic signals: known answers, streaming == batch, causality, bad input."""
 
+from dataclasses import replace
+
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
@@ -129,8 +131,12 @@ def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
 
 
 def stream(*, extractor, audio, audio_rate, ft_t, force, torque, audio_chunks, ft_chunks,
-           flush=True):
-    """Push chunks in the order of their last sample's time, as they would arrive."""
+           flush=True, single=False):
+    """
+    Push chunks in the order of their last sample's time, as they would arrive.
+
+    With ``single``, one-sample wrench chunks go through ``push_wrench_one`` (the live path).
+    """
     a_ends = np.minimum(np.cumsum(audio_chunks), audio.size)
     f_ends = np.minimum(np.cumsum(ft_chunks), ft_t.size)
     a_ends = sorted(set(a_ends.tolist()) | {audio.size})
@@ -142,6 +148,10 @@ def stream(*, extractor, audio, audio_rate, ft_t, force, torque, audio_chunks, f
         if kind == 0:
             out.append(extractor.push_audio(audio[la:end], stamp=T0 + (end - 1) / audio_rate))
             la = end
+        elif single and end - lf == 1:
+            out.append(extractor.push_wrench_one(
+                t=ft_t[lf], values=force[lf].tolist() + torque[lf].tolist()))
+            lf = end
         else:
             out.append(extractor.push_wrench(t=ft_t[lf:end], force=force[lf:end],
                                              torque=torque[lf:end]))
@@ -191,6 +201,57 @@ def test_streaming_equals_batch_for_any_chunking(config, rates, seed, audio_chun
     np.testing.assert_allclose(got.x, ref.x, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(got.valid, ref.valid)
     assert ref.valid.sum() > len(ref) // 2
+
+
+@settings(max_examples=25, deadline=None)
+@given(config=configs,
+       baseline=st.sampled_from([(3, 10, 15), (2, 4, 6), (5, 20, 9)]),
+       ft_rate=st.sampled_from([100, 200]),
+       seed=st.integers(0, 10_000),
+       ft_chunk=st.integers(1, 4))
+def test_single_sample_wrench_path_gives_the_same_bits(config, baseline, ft_rate, seed,
+                                                       ft_chunk):
+    # push_wrench_one (the node's path, one sample per message) against push_wrench with the
+    # same chunks, one-sample chunks mixed with longer ones, across a gap that restarts the window
+    delta_window, delta_lag, baseline_window = baseline
+    config = replace(config, delta_window=delta_window, delta_lag=delta_lag,
+                     baseline_window=baseline_window)
+    audio, ft_t, force, torque = make_signals(seed=seed, seconds=2.0, audio_rate=16000,
+                                              ft_rate=ft_rate)
+    keep = (ft_t < T0 + 0.9) | (ft_t > T0 + 1.0)
+    ft_t, force, torque = ft_t[keep], force[keep], torque[keep]
+    force[::37] *= 0.0                                  # zero magnitudes, ties in the median
+    rng = np.random.default_rng(seed)
+    ft_chunks = rng.integers(1, ft_chunk + 1, size=ft_t.size)
+    got = {}
+    for single in (False, True):
+        extractor = StreamingFeatureExtractor(config=config, audio_rate=16000,
+                                              ft_input_rate=ft_rate)
+        got[single] = stream(extractor=extractor, audio=audio, audio_rate=16000, ft_t=ft_t,
+                             force=force, torque=torque, audio_chunks=[160] * 200,
+                             ft_chunks=ft_chunks, single=single)
+    assert len(got[True]) > 100 and got[True].valid.sum() > 50
+    for field in ('t', 'x', 'valid'):
+        assert np.array_equal(getattr(got[True], field), getattr(got[False], field))
+
+
+def test_single_sample_wrench_path_rejects_bad_input_and_changes_nothing():
+    extractor = StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000)
+    extractor.push_wrench_one(t=T0, values=[0, 0, 1, 0, 0, 0])
+    with pytest.raises(InputError, match='NaN or Inf'):
+        extractor.push_wrench_one(t=T0 + 0.01, values=[np.nan, 0, 1, 0, 0, 0])
+    with pytest.raises(InputError, match='NaN or Inf'):
+        extractor.push_wrench_one(t=np.inf, values=[0, 0, 1, 0, 0, 0])
+    with pytest.raises(InputError, match='6 values'):
+        extractor.push_wrench_one(t=T0 + 0.01, values=[0, 1, 0, 0, 0])
+    with pytest.raises(InputError, match='not numeric'):
+        extractor.push_wrench_one(t=T0 + 0.01, values=['a', 1, 0, 0, 0, 0])
+    with pytest.raises(InputError, match='repeats or precedes'):
+        extractor.push_wrench_one(t=T0, values=[0, 0, 1, 0, 0, 0])
+    with pytest.raises(TimeJumpError, match='backwards'):
+        extractor.push_wrench_one(t=T0 - 5, values=[0, 0, 1, 0, 0, 0])
+    extractor.push_wrench_one(t=T0 + 0.01, values=[0, 0, 1, 0, 0, 0])
+    assert extractor.ft.last_input_t == T0 + 0.01
 
 
 @pytest.mark.parametrize('audio_rate', [16000, 44100, 48000])

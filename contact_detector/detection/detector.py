@@ -9,7 +9,7 @@ time the message was received, for the staleness check).
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Optional, Union
+from typing import Optional, Sequence, Union
 
 import numpy as np
 
@@ -123,9 +123,13 @@ class Decisions:
 
     @classmethod
     def empty(cls, error: Optional[str] = None) -> 'Decisions':
-        """Return a block with no frames."""
-        z = np.zeros(0)
-        return cls(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool), error=error)
+        """Return a block with no frames (its arrays are shared and read-only)."""
+        return cls(t=_NO_FLOATS, p=_NO_FLOATS, contact=_NO_BOOLS, valid=_NO_BOOLS, error=error)
+
+
+_NO_FLOATS = np.zeros(0)
+_NO_BOOLS = np.zeros(0, dtype=bool)
+_NO_FLOATS.flags.writeable = _NO_BOOLS.flags.writeable = False
 
 
 class AudioRateCheck:
@@ -294,6 +298,37 @@ class ContactDetector:
                 stamp = float(np.max(t))
             except (TypeError, ValueError, OverflowError):
                 pass
+            return self.drop(kind='wrench', reason=str(err), stamp=stamp)
+        self.latest_wrench_t = self.extractor.ft.last_input_t
+        return self.decide(frames, now=now)
+
+    def on_wrench_one(self, *, t: float, values: Sequence[float],
+                      now: Optional[float] = None) -> Decisions:
+        """
+        :meth:`on_wrench` for one sample (a live message): the same decisions, fewer calls.
+
+        Parameters
+        ----------
+        t : float
+            Header stamp, s.
+        values : sequence of 6 float
+            Force x, y, z (N) then torque x, y, z (N m).
+        now : float or None
+            Receive time, s.
+
+        """
+        self.counts['wrench_msgs'] += 1
+        push = self.extractor.push_wrench_one
+        try:
+            try:
+                frames = push(t=t, values=values)
+            except TimeJumpError as err:
+                self.counts['time_jumps'] += 1
+                self.last_error = f'time jumped backwards, state reset: {err}'
+                self.reset()
+                frames = push(t=t, values=values)
+        except InputError as err:
+            stamp = t if isinstance(t, (int, float)) else None
             return self.drop(kind='wrench', reason=str(err), stamp=stamp)
         self.latest_wrench_t = self.extractor.ft.last_input_t
         return self.decide(frames, now=now)

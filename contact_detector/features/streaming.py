@@ -16,6 +16,7 @@ stamps, bag log times); nothing here reads a clock. The batch reference in
 :mod:`contact_detector.features.batch` computes the same numbers without any streaming logic.
 """
 
+from bisect import bisect_left
 from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
@@ -29,9 +30,96 @@ from contact_detector.features.config import DELTA_FEATURES, FeatureConfig, PAPE
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
 
+_add_reduce = np.add.reduce
+_max_reduce = np.maximum.reduce
+
+try:
+    # The gufuncs np.fft.rfft calls (numpy >= 2.0), without its ~5 us of Python per call.
+    from numpy.fft._pocketfft_umath import rfft_n_even as _RFFT_EVEN, rfft_n_odd as _RFFT_ODD
+except ImportError:                 # another numpy: np.fft.rfft itself
+    _RFFT_EVEN = _RFFT_ODD = None
+
+
+def _rfft(frames: np.ndarray) -> np.ndarray:
+    """``np.fft.rfft(frames, axis=1)`` of a C-contiguous (m, n) float64 array: the same bits."""
+    n = frames.shape[1]
+    if _RFFT_EVEN is None:
+        return np.fft.rfft(frames, axis=1)
+    out = np.empty((frames.shape[0], n // 2 + 1), dtype=np.complex128)
+    return (_RFFT_EVEN if n % 2 == 0 else _RFFT_ODD)(frames, 1, out=out)
+
 
 class TimeJumpError(InputError):
     """Stamps jumped backwards by more than the tolerance (e.g. a bag loop)."""
+
+
+class TailBuffer:
+    """
+    Newest rows of a stream in preallocated storage: appending copies the new rows only.
+
+    ``view`` is the rows kept, oldest first, contiguous. Storage is reused: the kept rows move
+    to its start when it is full (once every ~``capacity`` rows), and it grows for larger
+    blocks. Values are only stored, never computed, so results do not depend on it.
+
+    Parameters
+    ----------
+    capacity : int
+        Rows stored before the first move, at least the number of rows kept between appends.
+    width : int or None
+        Columns per row (None: 1-D).
+
+    """
+
+    def __init__(self, *, capacity: int, width: Optional[int] = None) -> None:
+        self._shape = () if width is None else (width,)
+        self._buf = np.zeros((2 * capacity,) + self._shape)
+        self._lo = self._hi = 0
+        self.view = self._buf[:0]
+
+    def clear(self) -> None:
+        """Forget every row."""
+        self._lo = self._hi = 0
+        self.view = self._buf[:0]
+
+    def __len__(self) -> int:
+        """Return the number of rows kept."""
+        return self._hi - self._lo
+
+    def _room(self, n: int) -> None:
+        # Make room for n more rows at the end.
+        kept = self._hi - self._lo
+        if kept + n > self._buf.shape[0]:
+            grown = np.zeros((2 * (kept + n),) + self._shape)
+            grown[:kept] = self._buf[self._lo:self._hi]
+            self._buf = grown
+        else:
+            self._buf[:kept] = self._buf[self._lo:self._hi]
+        self._lo, self._hi = 0, kept
+
+    def extend(self, rows: np.ndarray) -> None:
+        """Append rows (shape (n,) or (n, width))."""
+        n = rows.shape[0]
+        if self._hi + n > self._buf.shape[0]:
+            self._room(n)
+        self._buf[self._hi:self._hi + n] = rows
+        self._hi += n
+        self.view = self._buf[self._lo:self._hi]
+
+    def append(self, row) -> None:
+        """Append one row (a float, or a sequence of ``width`` floats)."""
+        if self._hi == self._buf.shape[0]:
+            self._room(1)
+        self._buf[self._hi] = row
+        self._hi += 1
+        self.view = self._buf[self._lo:self._hi]
+
+    def keep_last(self, n: int) -> int:
+        """Keep the newest ``n`` rows at most; return how many were dropped."""
+        drop = max(0, self._hi - self._lo - n)
+        if drop:
+            self._lo += drop
+            self.view = self._buf[self._lo:self._hi]
+        return drop
 
 
 @dataclass(frozen=True)
@@ -257,24 +345,28 @@ class AudioFramer:
             self._update_anchor(n, stamp)
         self._buf = np.concatenate([self._buf, samples]) if self._buf.size else samples
         self._n_total += n
-        w = self.frame_length
+        w, hop = self.frame_length, self.hop
         # Frames i with e_i <= n_total: i <= (n_total - w + 0.5) / hop, checked exactly below.
-        upper = int(math.floor((self._n_total - w + 0.5) / self.hop)) + 2 - self._next_frame
-        if upper > 0:
-            ends = frame_ends(first=self._next_frame, count=upper, frame_length=w, hop=self.hop)
-            ends = ends[ends <= self._n_total]
-        else:
-            ends = np.zeros(0, dtype=np.int64)
-        if ends.size:
+        # frame_ends() in Python numbers (a few frames per chunk): the same IEEE operations.
+        first = self._next_frame
+        upper = int(math.floor((self._n_total - w + 0.5) / hop)) + 2 - first
+        ends = [e for e in (w + math.floor(i * hop + 0.5) for i in range(first, first + upper))
+                if e <= self._n_total]
+        if len(ends) == 1:
+            start = ends[0] - w - self._buf_start
+            # A copy, as the fancy index below makes: the sum must not see another alignment.
+            power = spectral.audio_power(frames=self._buf[start:start + w].reshape(1, w).copy())
+            t = np.array([self._anchor + (ends[0] - 1) / self.sample_rate])
+        elif ends:
+            ends = np.array(ends)
             starts = ends - w - self._buf_start
             windows = self._buf[starts[:, None] + self._offsets]
             power = spectral.audio_power(frames=windows)
             t = self._anchor + (ends - 1) / self.sample_rate
-            self._next_frame += ends.size
         else:
             power, t = np.zeros(0), np.zeros(0)
-        next_start = int(frame_ends(first=self._next_frame, count=1, frame_length=w,
-                                    hop=self.hop)[0]) - w
+        self._next_frame += len(ends)
+        next_start = math.floor(self._next_frame * hop + 0.5)
         keep_from = min(max(next_start, self._buf_start), self._n_total)
         self._buf = self._buf[keep_from - self._buf_start:]
         self._buf_start = keep_from
@@ -354,6 +446,18 @@ class ForceTorqueStream:
         self.history = need
         self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
         self._offsets = np.arange(n)
+        # The single-sample path's constants (the values the block path computes per call).
+        self._nu = spectral.normalised_bin_frequencies(n_bins=n // 2 + 1, window_length=n)
+        self._hann = (0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n)
+                      if config.ft_window_fn == 'hann' else None)
+        wanted = set(self.use_delta)
+        self._want_delta = bool(wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'})
+        self._want_change = bool(wanted & {'force_change', 'torque_change', 'ft_change_angle'})
+        self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
+                                            ('ft_change_angle', 'force_change', 'torque_change'))
+                        if angle[0] in wanted]
+        self._mags = TailBuffer(capacity=need + 64, width=2)    # |F|, |T| of the newest samples
+        self._mag_ts = TailBuffer(capacity=need + 64)            # their times
         self.restarts = 0
         self.reset()
 
@@ -366,9 +470,9 @@ class ForceTorqueStream:
         # Forget the window, previous spectra and partial block; keep the last stamp.
         self._block_t = np.zeros(0)
         self._block_v = np.zeros((0, 6))
-        self._mag = np.zeros((0, 2))        # |F|, |T| of the newest decimated samples
-        self._mag_t = np.zeros(0)           # their times
-        self._mag_start = 0                 # decimated index of self._mag[0]
+        self._mags.clear()                  # |F|, |T| of the newest decimated samples
+        self._mag_ts.clear()                # their times
+        self._mag_start = 0                 # decimated index of the oldest sample kept
         self._n_dec = 0                     # decimated samples since the restart
         self._prev_en: Optional[np.ndarray] = None   # (2, n_bins) previous EN spectra
 
@@ -434,6 +538,107 @@ class ForceTorqueStream:
             return np.zeros(0), np.zeros((0, len(self.columns)))
         return np.concatenate(out_t), np.concatenate(out_f)
 
+    def push_one(self, *, t: float, values: Sequence[float]) -> Optional[tuple[float, list]]:
+        """
+        Add one wrench sample (a live message); return the feature frame it completes, if any.
+
+        The same numbers as :meth:`push` with one sample, in fewer array calls.
+
+        Parameters
+        ----------
+        t : float
+            Sample stamp, seconds, finite.
+        values : sequence of 6 float
+            Force x, y, z in N and torque x, y, z in N m, finite.
+
+        Returns
+        -------
+        (float, list of float) or None
+            The frame's time and its features (``self.columns``), or None.
+
+        """
+        last = self.last_input_t
+        if last is not None and t <= last:
+            self.check_stamps(np.array([t]))
+        if self.decimation != 1:
+            ft_t, ft_x = self.push(t=np.array([t]), force=np.array([values[:3]]),
+                                   torque=np.array([values[3:]]))
+            return (float(ft_t[0]), ft_x[0].tolist()) if ft_t.size else None
+        if last is not None and t - last > self.gap_reset_s:
+            self.restarts += 1
+            self._restart()
+        self.last_input_t = t
+        fx, fy, fz, tx, ty, tz = values
+        # np.linalg.norm's sum of three squares, in its order.
+        self._mags.append((math.sqrt(fx * fx + fy * fy + fz * fz),
+                           math.sqrt(tx * tx + ty * ty + tz * tz)))
+        self._mag_ts.append(t)
+        end = self._n_dec
+        self._n_dec += 1
+        out = None
+        if end >= self.first_end and (end - self.first_end) % self.config.ft_hop == 0:
+            out = t, self._features_one()
+        self._mag_ts.keep_last(self.history)
+        self._mag_start += self._mags.keep_last(self.history)
+        return out
+
+    def _features_one(self) -> list:
+        # _features for the newest sample: the same array operations on the same (2, n) window
+        # in fewer calls, the per-frame scalars in Python floats (the same IEEE operations).
+        cfg = self.config
+        n = cfg.ft_window
+        mags = self._mags.view
+        frames = np.ascontiguousarray(mags[mags.shape[0] - n:].T)           # (2, n)
+        if cfg.ft_detrend == 'mean':
+            mean = _add_reduce(frames, axis=1, keepdims=True)   # np.mean: the sum / n
+            mean /= n
+            frames -= mean
+        if self._hann is not None:
+            frames *= self._hann
+        xt = np.abs(_rfft(frames))
+        peak = _max_reduce(xt, axis=1, keepdims=True)
+        (pf,), (pt,) = peak.tolist()
+        xt /= peak if pf > 0.0 and pt > 0.0 else np.where(peak > 0.0, peak, 1.0)
+        den = _add_reduce(xt, axis=1, keepdims=True)
+        den += spectral.EPS
+        (df,), (dt,) = den.tolist()
+        cf, ct = np.einsum('ik,k->i', xt, self._nu).tolist()
+        cf, ct = cf / df, ct / dt
+        dev = np.subtract(self._nu, [[cf], [ct]])
+        dev *= dev
+        sf, st = np.einsum('ik,ik->i', dev, xt).tolist()
+        en = xt / den
+        diff = en - (en if self._prev_en is None else self._prev_en)
+        ff, ftq = np.einsum('ik,ik->i', diff, diff).tolist()
+        self._prev_en = en
+        row = [cf, math.sqrt(sf / df), ff, ct, math.sqrt(st / dt), ftq]
+        if self.use_delta:
+            row.extend(self._deltas_one(mags))
+        return row
+
+    def _deltas_one(self, mags: np.ndarray) -> list:
+        # The *_delta / *_change / angle columns for the newest sample (see _features).
+        cfg = self.config
+        lag, w, wb = cfg.delta_lag, cfg.delta_window, cfg.baseline_window
+        span = lag + max(w, wb)
+        f, t = mags[mags.shape[0] - span:].T.tolist()           # oldest needed .. newest
+        lagged = span - lag                                     # exclusive end
+        recent_f, recent_t = _mean_of(f, span - w, span), _mean_of(t, span - w, span)
+        derived = {}
+        if self._want_delta:
+            derived['force_delta'] = recent_f - _mean_of(f, lagged - w, lagged)
+            derived['torque_delta'] = recent_t - _mean_of(t, lagged - w, lagged)
+        if self._want_change:
+            derived['force_change'] = recent_f - _median_of(f[lagged - wb:lagged])
+            derived['torque_change'] = recent_t - _median_of(t[lagged - wb:lagged])
+        if self._angles:
+            # np.arctan2 (math.atan2 rounds differently), every angle in one call
+            values = np.arctan2([derived[dt] for _, _, dt in self._angles],
+                                [derived[df] for _, df, _ in self._angles]).tolist()
+            for (name, _, _), value in zip(self._angles, values):
+                derived[name] = value
+        return [derived[name] for name in self.use_delta]
+
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.decimation
         if m == 1:
@@ -450,8 +655,8 @@ class ForceTorqueStream:
         dec_v = bv[:used].reshape(n_blocks, m, 6).mean(axis=1) if m > 1 else bv[:used]
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
-        self._mag = np.concatenate([self._mag, mag])
-        self._mag_t = np.concatenate([self._mag_t, dec_t])
+        self._mags.extend(mag)
+        self._mag_ts.extend(dec_t)
         first_new = self._n_dec
         self._n_dec += n_blocks
         # Frame ends (decimated indices) that fall on the new samples.
@@ -461,12 +666,11 @@ class ForceTorqueStream:
         ends = first_end + hop * np.arange(start_j, (self._n_dec - 1 - first_end) // hop + 1)
         if ends.size:
             feats = self._features(ends - self._mag_start)
-            times = self._mag_t[ends - self._mag_start]
+            times = self._mag_ts.view[ends - self._mag_start]
         else:
             feats, times = np.zeros((0, len(self.columns))), np.zeros(0)
-        keep = self._mag.shape[0] - min(self._mag.shape[0], self.history)
-        self._mag, self._mag_t = self._mag[keep:], self._mag_t[keep:]
-        self._mag_start += keep
+        self._mag_ts.keep_last(self.history)
+        self._mag_start += self._mags.keep_last(self.history)
         return times, feats
 
     def _features(self, ends: np.ndarray) -> np.ndarray:
@@ -474,7 +678,8 @@ class ForceTorqueStream:
         n = cfg.ft_window
         m = ends.size
         # |F| and |T| windows side by side: one DFT call for both signals.
-        windows = self._mag[(ends - n + 1)[:, None] + self._offsets]        # (m, n, 2)
+        mags = self._mags.view
+        windows = mags[(ends - n + 1)[:, None] + self._offsets]             # (m, n, 2)
         # Contiguous whatever m is: numpy sums strided rows in another order, and a frame's
         # features must not depend on how many frames one call computes.
         frames = np.ascontiguousarray(windows.transpose(2, 0, 1).reshape(2 * m, n))
@@ -497,21 +702,36 @@ class ForceTorqueStream:
         derived = {}
         if self.use_delta:
             # |F| and |T| side by side; the newest samples' mean serves both families
-            recent = window_mean(signal=self._mag, ends=ends, window=cfg.delta_window)
+            recent = window_mean(signal=mags, ends=ends, window=cfg.delta_window)
             lagged, wanted = ends - cfg.delta_lag, set(self.use_delta)
             if wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'}:
-                change = recent - window_mean(signal=self._mag, ends=lagged,
+                change = recent - window_mean(signal=mags, ends=lagged,
                                               window=cfg.delta_window)
                 derived.update(_with_angle(('force_delta', 'torque_delta', 'ft_delta_angle'),
                                            change))
             if wanted & {'force_change', 'torque_change', 'ft_change_angle'}:
-                change = recent - window_median(signal=self._mag, ends=lagged,
+                change = recent - window_median(signal=mags, ends=lagged,
                                                 window=cfg.baseline_window)
                 derived.update(_with_angle(('force_change', 'torque_change', 'ft_change_angle'),
                                            change))
         for col, name in enumerate(self.use_delta, start=6):
             out[:, col] = derived[name]
         return out
+
+
+def _mean_of(values: list, lo: int, hi: int) -> float:
+    """Mean of ``values[lo:hi]`` summed in order, as :func:`window_mean`'s ``np.mean`` does."""
+    acc = values[lo]
+    for i in range(lo + 1, hi):
+        acc += values[i]
+    return acc / (hi - lo)
+
+
+def _median_of(values: list) -> float:
+    """Median of ``values``: the value(s) :func:`window_median` selects."""
+    ordered = sorted(values)
+    k = len(ordered) // 2
+    return ordered[k] if len(ordered) % 2 else (ordered[k - 1] + ordered[k]) / 2
 
 
 def _with_angle(names: tuple, change: np.ndarray) -> dict:
@@ -657,6 +877,11 @@ class StreamingFeatureExtractor:
                          if 'audio_power_rel_db' in self.names else None)
         self._peak_idx = (self.names.index('audio_peak_rel_db')
                           if 'audio_peak_rel_db' in self.names else None)
+        self._ft_ts = TailBuffer(capacity=self.history_frames + 64)
+        self._ft_xs = TailBuffer(capacity=self.history_frames + 64, width=len(self.ft.columns))
+        self._empty = FeatureFrames.empty(self.names)
+        for array in (self._empty.t, self._empty.x, self._empty.valid):
+            array.flags.writeable = False       # shared by every call that emits nothing
         self.reset()
 
     def reset(self) -> None:
@@ -664,17 +889,20 @@ class StreamingFeatureExtractor:
         self.audio.reset()
         self.ft.reset()
         self.floor.reset()
-        self._ft_t = np.zeros(0)
-        self._ft_x = np.zeros((0, len(self.ft.columns)))
-        self._pend_t = np.zeros(0)
-        self._pend_a = np.zeros((0, 3))     # power, dB above floor, recent peak of that
-        self._pend_arrival = np.zeros(0)
-        self._rel_hist = np.full(self.config.peak_frames - 1, -np.inf)
+        self._ft_ts.clear()
+        self._ft_xs.clear()
+        self._ft_t = self._ft_ts.view       # times of the F/T feature frames kept
+        self._ft_x = self._ft_xs.view       # and their features
+        # Frames waiting for F/T, in Python numbers (one or two at a time live).
+        self._pend_t: list = []             # end times
+        self._pend_a: list = []             # (power, dB above floor, recent peak of that)
+        self._pend_arrival: list = []       # audio time of the chunk that completed them
+        self._rel_hist = [-math.inf] * (self.config.peak_frames - 1)
 
     @property
     def pending(self) -> int:
         """Audio frames waiting for F/T."""
-        return int(self._pend_t.size)
+        return len(self._pend_t)
 
     def push_audio(self, samples: np.ndarray, *, stamp: Optional[float] = None) -> FeatureFrames:
         """
@@ -715,19 +943,26 @@ class StreamingFeatureExtractor:
             needs_rel = self._rel_idx is not None or self._peak_idx is not None
             rel = (spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
                    if needs_rel else np.zeros_like(power))
-            peak = self._recent_peak(rel) if self._peak_idx is not None else rel
-            arrival = self.audio.latest_time
-            self._pend_t = np.concatenate([self._pend_t, t])
-            self._pend_a = np.concatenate([self._pend_a, np.stack([power, rel, peak], axis=1)])
-            self._pend_arrival = np.concatenate([self._pend_arrival,
-                                                 np.full(t.size, arrival)])
+            rel_values = rel.tolist()
+            if self._peak_idx is None:
+                peak = rel_values
+            elif t.size == 1:
+                # _recent_peak for one frame in Python floats (max picks one of the values)
+                history = self._rel_hist + rel_values
+                self._rel_hist = history[1:]
+                peak = [max(history)]
+            else:
+                peak = self._recent_peak(rel).tolist()
+            self._pend_t.extend(t.tolist())
+            self._pend_a.extend(zip(power.tolist(), rel_values, peak))
+            self._pend_arrival.extend([self.audio.latest_time] * t.size)
         return self._drain(force=False)
 
     def _recent_peak(self, rel: np.ndarray) -> np.ndarray:
         # Running maximum over the newest peak_frames values, across chunk boundaries.
         k = self.config.peak_frames
         history = np.concatenate([self._rel_hist, rel])
-        self._rel_hist = history[history.size - (k - 1):] if k > 1 else history[:0]
+        self._rel_hist = history[history.size - (k - 1):].tolist() if k > 1 else []
         return history[np.arange(rel.size)[:, None] + np.arange(k)].max(axis=1)
 
     def push_wrench(self, *, t: np.ndarray, force: np.ndarray,
@@ -767,8 +1002,51 @@ class StreamingFeatureExtractor:
         ft_t, ft_x = self.ft.push(t=t, force=force, torque=torque)
         if ft_t.size:
             keep = self.history_frames
-            self._ft_t = np.concatenate([self._ft_t, ft_t])[-keep:]
-            self._ft_x = np.concatenate([self._ft_x, ft_x])[-keep:]
+            self._ft_ts.extend(ft_t[-keep:])
+            self._ft_xs.extend(ft_x[-keep:])
+            self._ft_ts.keep_last(keep)
+            self._ft_xs.keep_last(keep)
+            self._ft_t, self._ft_x = self._ft_ts.view, self._ft_xs.view
+        return self._drain(force=False)
+
+    def push_wrench_one(self, *, t: float, values: Sequence[float]) -> FeatureFrames:
+        """
+        :meth:`push_wrench` for one sample (a live message), in fewer array calls.
+
+        Parameters
+        ----------
+        t : float
+            Header stamp, seconds.
+        values : sequence of 6 float
+            Force x, y, z in N, then torque x, y, z in N m.
+
+        Raises
+        ------
+        InputError
+            Not 6 values, a value or stamp that is not a finite number, a repeated or
+            out-of-order stamp (nothing is changed).
+        TimeJumpError
+            The stamp jumped backwards (nothing is changed; reset and push again).
+
+        """
+        try:
+            t = float(t)
+            values = [float(v) for v in values]
+        except (TypeError, ValueError, OverflowError) as err:
+            raise InputError(f'wrench values are not numeric: {err}') from err
+        if len(values) != 6:
+            raise InputError(f'a wrench sample has 6 values, got {len(values)}')
+        isfinite = math.isfinite
+        if not (isfinite(t) and all(map(isfinite, values))):
+            raise InputError('wrench contains NaN or Inf')
+        frame = self.ft.push_one(t=t, values=values)
+        if frame is not None:
+            keep = self.history_frames
+            self._ft_ts.append(frame[0])
+            self._ft_xs.append(frame[1])
+            self._ft_ts.keep_last(keep)
+            self._ft_xs.keep_last(keep)
+            self._ft_t, self._ft_x = self._ft_ts.view, self._ft_xs.view
         return self._drain(force=False)
 
     def flush(self) -> FeatureFrames:
@@ -776,26 +1054,28 @@ class StreamingFeatureExtractor:
         return self._drain(force=True)
 
     def _drain(self, *, force: bool) -> FeatureFrames:
-        n = self._pend_t.size
+        n = len(self._pend_t)
         if n == 0:
-            return FeatureFrames.empty(self.names)
+            return self._empty
         if force:
             count = n
         else:
+            # bisect_left is np.searchsorted(side='left'): the same binary search
             last = self.ft.last_input_t
-            ready = 0 if last is None else int(
-                np.searchsorted(self._pend_t, last + self.ready_margin_s, side='left'))
+            ready = 0 if last is None else bisect_left(self._pend_t, last + self.ready_margin_s)
             latest = self.audio.latest_time
-            timed_out = 0 if latest is None else int(np.searchsorted(
-                self._pend_arrival, latest - self.max_ft_wait_s, side='left'))
+            timed_out = 0 if latest is None else bisect_left(self._pend_arrival,
+                                                             latest - self.max_ft_wait_s)
             count = max(ready, timed_out)
         if count == 0:
-            return FeatureFrames.empty(self.names)
+            return self._empty
         t = self._pend_t[:count]
         audio = self._pend_a[:count]
-        self._pend_t = self._pend_t[count:]
-        self._pend_a = self._pend_a[count:]
-        self._pend_arrival = self._pend_arrival[count:]
+        del self._pend_t[:count], self._pend_a[:count], self._pend_arrival[:count]
+        if count == 1:
+            return self._aligned_one(t[0], audio[0])
+        t = np.array(t)
+        audio = np.array(audio)
         x = np.zeros((count, len(self.names)))
         x[:, 0] = audio[:, 0]
         if self._rel_idx is not None:
@@ -809,3 +1089,19 @@ class StreamingFeatureExtractor:
             rows = np.flatnonzero(valid)[:, None]
             x[rows, self._ft_dst] = self._ft_x[idx[valid]][:, self._ft_col]
         return FeatureFrames(t=t, x=x, valid=valid, names=self.names)
+
+    def _aligned_one(self, t: float, audio: tuple) -> FeatureFrames:
+        # _drain's alignment for one frame, in Python numbers.
+        x = np.zeros((1, len(self.names)))
+        row = x[0]
+        row[0] = audio[0]
+        if self._rel_idx is not None:
+            row[self._rel_idx] = audio[1]
+        if self._peak_idx is not None:
+            row[self._peak_idx] = audio[2]
+        ft_t = self._ft_t
+        idx = int(np.searchsorted(ft_t, t, side='right')) - 1
+        valid = idx >= 0 and t - float(ft_t[idx]) <= self.max_ft_age_s
+        if valid:
+            row[self._ft_dst] = self._ft_x[idx, self._ft_col]
+        return FeatureFrames(t=np.array([t]), x=x, valid=np.array([valid]), names=self.names)

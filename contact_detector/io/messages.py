@@ -187,6 +187,36 @@ def wrench_to_arrays(msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array([t]), force, torque
 
 
+def wrench_sample(msg: Any) -> tuple[float, tuple]:
+    """
+    Read a ``geometry_msgs/WrenchStamped`` (or what ``cdr.read_wrench_stamped`` gives) as floats.
+
+    Returns
+    -------
+    t : float
+        Header stamp, seconds.
+    values : tuple of 6 float
+        Force x, y, z (N), then torque x, y, z (N m).
+
+    Raises
+    ------
+    InputError
+        Missing or non-numeric fields. (NaN/Inf and stamp order are checked by the core.)
+
+    """
+    if isinstance(msg, tuple):          # from cdr.read_wrench_stamped
+        stamp, values = msg
+        return stamp_to_seconds(stamp), values
+    t = stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
+    wrench = _field(msg, 'wrench')
+    try:
+        f, m = wrench.force, wrench.torque
+        values = (float(f.x), float(f.y), float(f.z), float(m.x), float(m.y), float(m.z))
+    except (AttributeError, TypeError, ValueError, OverflowError) as err:
+        raise InputError(f'malformed wrench message: {err}') from err
+    return t, values
+
+
 def audio_stamp(msg: Any, msg_type: str) -> Optional[float]:
     """
     Return the header stamp (s) of a stamped audio message, None for unstamped types.

@@ -54,7 +54,7 @@ from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
-                                          wrench_to_arrays)
+                                          wrench_sample)
 from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
@@ -417,13 +417,13 @@ class ContactDetectorNode(Node):
         stream.received += 1
         stream.window_msgs += 1
         try:
-            t, force, torque = wrench_to_arrays(msg)
+            t, values = wrench_sample(msg)
             if self.config.wrench_stamp_source == 'receive':
-                t = np.array([now])
+                t = now
             else:
                 try:
-                    check_stamp(stamp=float(t[0]), now=now,
-                                max_future_s=self.config.max_future_s, what='wrench stamp')
+                    check_stamp(stamp=t, now=now, max_future_s=self.config.max_future_s,
+                                what='wrench stamp')
                 except InputError:
                     self.counts['bad_stamps'] += 1
                     raise
@@ -431,10 +431,10 @@ class ContactDetectorNode(Node):
             self._handle(self.detector.drop(kind='wrench', reason=str(err), stamp=None), now,
                          entry, 'wrench')
             return
-        stream.last_stamp = float(t[-1])
-        stream.window_samples += t.shape[0]
-        self._handle(self.detector.on_wrench(t=t, force=force, torque=torque, now=now), now,
-                     entry, 'wrench')
+        stream.last_stamp = t
+        stream.window_samples += 1
+        self._handle(self.detector.on_wrench_one(t=t, values=values, now=now), now, entry,
+                     'wrench')
 
     def _on_audio_info(self, msg: Any) -> None:
         try:
