@@ -407,3 +407,12 @@ def test_a_config_saved_before_baseline_window_existed_loads_with_the_same_featu
     assert config.baseline_window == 15
     assert config.feature_names[-2:] == ('force_delta', 'torque_delta')
     assert ForceTorqueStream(config=config, input_rate=100.0).history == 64
+
+
+@pytest.mark.parametrize('n', [16, 63, 64, 65, 160])
+def test_fast_rfft_has_the_bits_of_numpy_rfft(n):
+    # The live path may call numpy's pocketfft gufunc directly (a private module, checked at
+    # import); whichever it uses, the spectra must be np.fft.rfft's to the bit.
+    from contact_detector.features.streaming import _rfft
+    frames = np.random.default_rng(n).normal(size=(2, n))
+    assert np.array_equal(_rfft(np.ascontiguousarray(frames)), np.fft.rfft(frames, axis=1))
