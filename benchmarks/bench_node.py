@@ -116,8 +116,8 @@ def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
     import psutil
     chunk = audio_rate // 100
     paths = {name: work / f'{name}.json' for name in ('node', 'pub', 'listen')}
-    stop = work / 'stop'
-    for path in list(paths.values()) + [stop]:
+    stop, ready = work / 'stop', work / 'listener_ready'
+    for path in list(paths.values()) + [stop, ready]:
         if path.exists():
             path.unlink()
     sets = [arg for item in settings for arg in ('--set', item)]
@@ -125,10 +125,10 @@ def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
                    '--audio-rate', str(audio_rate),
                    '--ft-rate', str(ft_rate), '--out', str(paths['node'])], work / 'node.log')
     listener = _spawn([str(HELPER), 'listen', '--out', str(paths['listen']), '--stop-file',
-                       str(stop)], work / 'listen.log')
+                       str(stop), '--ready-file', str(ready)], work / 'listen.log')
     publisher = _spawn([str(HELPER), 'publish', '--out', str(paths['pub']), '--audio-rate',
-                        str(audio_rate), '--ft-rate', str(ft_rate), '--chunk', str(chunk)],
-                       work / 'pub.log')
+                        str(audio_rate), '--ft-rate', str(ft_rate), '--chunk', str(chunk),
+                        '--wait-file', str(ready)], work / 'pub.log')
     proc = psutil.Process(node.pid)
     samples = []
     while publisher.poll() is None:

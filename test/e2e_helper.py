@@ -60,7 +60,8 @@ def publish(args: argparse.Namespace) -> None:
     _wait(node, lambda: (wrench_pub.get_subscription_count() > 0
                          and audio_pub.get_subscription_count() > 0
                          and node.count_subscribers('contact') >= args.listeners
-                         and node.count_subscribers('release') >= args.listeners),
+                         and node.count_subscribers('release') >= args.listeners
+                         and all(Path(f).exists() for f in args.wait_file)),
           60.0, 'the node and the listener')
     time.sleep(1.0)     # let the DDS readers of all parties match
     wall0 = time.time() + 0.1
@@ -119,13 +120,20 @@ def listen(args: argparse.Namespace) -> None:
                                  else float(msg.data)))
         return callback
 
-    node.create_subscription(Bool, 'contact', sink('contact'), qos)
-    node.create_subscription(Float32, 'contact_probability', sink('contact_probability'), qos)
-    node.create_subscription(Bool, 'release', sink('release'), qos)
+    subs = [node.create_subscription(Bool, 'contact', sink('contact'), qos),
+            node.create_subscription(Float32, 'contact_probability', sink('contact_probability'),
+                                     qos),
+            node.create_subscription(Bool, 'release', sink('release'), qos)]
     stop = Path(args.stop_file)
+    ready = Path(args.ready_file) if args.ready_file else None
     end = time.monotonic() + args.max_s
     while not stop.exists() and time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.02)
+        # Matched with the node's publishers: the publisher may start (frames before that are
+        # lost to this listener, however reliable the QoS, and a start-up race is not the node's).
+        if ready is not None and all(sub.get_publisher_count() > 0 for sub in subs):
+            ready.touch()
+            ready = None
     Path(args.out).write_text(json.dumps(record))
     node.destroy_node()
     rclpy.try_shutdown()
@@ -147,10 +155,14 @@ def main() -> None:
     pub.add_argument('--after-onset', type=float, default=0.0,
                      help='stop this long after the true onset')
     pub.add_argument('--listeners', type=int, default=1)
+    pub.add_argument('--wait-file', action='append', default=[],
+                     help="start once this file exists (a listener's --ready-file)")
     lis = sub.add_parser('listen')
     lis.add_argument('--out', required=True)
     lis.add_argument('--stop-file', required=True)
     lis.add_argument('--max-s', type=float, default=120.0)
+    lis.add_argument('--ready-file', default='',
+                     help="touched once every subscription has matched the node's publishers")
     args = parser.parse_args()
     publish(args) if args.cmd == 'publish' else listen(args)
 

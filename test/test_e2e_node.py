@@ -36,10 +36,12 @@ def test_release_after_onset_across_processes(model, tmp_path):
     params = HERE.parent / 'params' / 'contact_detector.yaml'
     node = _start(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
                    '-p', f'model.path:={model}'], tmp_path / 'node.log')
+    ready = tmp_path / 'listener_ready'
     listener = _start([str(HERE / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
-                       '--stop-file', str(stop), '--max-s', '90'], tmp_path / 'listen.log')
+                       '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
+                      tmp_path / 'listen.log')
     publisher = _start([str(HERE / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
-                        '--after-onset', '1.5'], tmp_path / 'pub.log')
+                        '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
     try:
         publisher.wait(timeout=75)
         time.sleep(0.5)

@@ -172,19 +172,8 @@ def wrench_to_arrays(msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         Missing or non-numeric fields. (NaN/Inf and stamp order are checked by the core.)
 
     """
-    if isinstance(msg, tuple):          # from cdr.read_wrench_stamped
-        stamp, values = msg
-        return (np.array([stamp_to_seconds(stamp)]), np.array([values[:3]]),
-                np.array([values[3:]]))
-    t = stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
-    wrench = _field(msg, 'wrench')
-    try:
-        f, m = wrench.force, wrench.torque
-        force = np.array([[float(f.x), float(f.y), float(f.z)]])
-        torque = np.array([[float(m.x), float(m.y), float(m.z)]])
-    except (AttributeError, TypeError, ValueError, OverflowError) as err:
-        raise InputError(f'malformed wrench message: {err}') from err
-    return np.array([t]), force, torque
+    t, values = wrench_sample(msg)
+    return np.array([t]), np.array([values[:3]]), np.array([values[3:]])
 
 
 def wrench_sample(msg: Any) -> tuple[float, tuple]:
