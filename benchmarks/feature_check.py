@@ -12,6 +12,7 @@ features computed once.
 ``--compare deltas`` (round 3): the shipped features with other ``delta_window`` /
 ``delta_lag`` (the F/T change is the newest ``delta_window`` samples against the samples
 ``delta_lag`` earlier), features computed once per setting.
+``--compare sustain`` (round 3): the shipped features, the slow path's threshold and length.
 
     python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
@@ -24,7 +25,7 @@ from typing import Dict, List
 import numpy as np
 
 from contact_detector.cli.sweep import decode
-from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS, DEFAULT_RULE
+from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS
 from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
@@ -34,8 +35,12 @@ from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_fo
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
-#: The release rule's fast path without unanimity: 9 of the 10 trees.
-FAST_RULE = replace(DEFAULT_RULE, threshold=0.9)
+#: The shipped rule since round 2, written out: the tables in docs/sweep.md do not move with
+#: DEFAULT_RULE.
+ROUND2_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
+                           sustain_frames=15, sustain_threshold=0.5)
+#: Its fast path without unanimity: 9 of the 10 trees.
+FAST_RULE = replace(ROUND2_RULE, threshold=0.9)
 #: Round 2's change windows (round 3 shortened them); ``--compare features`` reproduces round 2.
 ROUND2 = replace(DEFAULT_FEATURES, delta_window=3, delta_lag=10)
 
@@ -59,7 +64,15 @@ def feature_rules() -> List[DecisionRule]:
     return [DecisionRule(threshold=0.7, confirm_frames=2),
             DecisionRule(threshold=0.85, **slow),
             DecisionRule(threshold=0.95),
-            DEFAULT_RULE]
+            ROUND2_RULE]
+
+
+def sustain_rules() -> List[DecisionRule]:
+    """The slow path (quiet contacts) with lower thresholds and a longer mean."""
+    return [replace(ROUND2_RULE, sustain_threshold=0.5),
+            replace(ROUND2_RULE, sustain_threshold=0.4),
+            replace(ROUND2_RULE, sustain_threshold=0.3),
+            replace(ROUND2_RULE, sustain_frames=20, sustain_threshold=0.4)]
 
 
 def delta_configs() -> List[tuple]:
@@ -115,7 +128,8 @@ def main() -> int:
     parser.add_argument('heldout', nargs='+', help='held-out folders')
     parser.add_argument('--seeds', default='0,1,2,3', help='forest seeds, comma-separated')
     parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--compare', choices=('features', 'deltas'), default='features')
+    parser.add_argument('--compare', choices=('features', 'deltas', 'sustain'),
+                        default='features')
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(',')]
     print(f'forest seeds {seeds}; sums over the seeds, latency = median of the per-seed '
@@ -129,10 +143,16 @@ def main() -> int:
         for setting in feature_settings():
             _rows(setting, train, heldout, feature_rules(), seeds, args.jobs)
         return 0
+    if args.compare == 'sustain':
+        setting = FeatureSetting('shipped', DEFAULT_FEATURES, DEFAULT_LABELS)
+        _rows(setting, _frames([args.train], DEFAULT_FEATURES, args.jobs),
+              _frames(args.heldout, DEFAULT_FEATURES, args.jobs), sustain_rules(), seeds,
+              args.jobs)
+        return 0
     for name, config in delta_configs():
         setting = FeatureSetting(name, config, DEFAULT_LABELS)
         _rows(setting, _frames([args.train], config, args.jobs),
-              _frames(args.heldout, config, args.jobs), [DEFAULT_RULE, FAST_RULE], seeds,
+              _frames(args.heldout, config, args.jobs), [ROUND2_RULE, FAST_RULE], seeds,
               args.jobs)
     return 0
 
