@@ -318,15 +318,9 @@ class ContactDetector:
 
         """
         self.counts['wrench_msgs'] += 1
-        push = self.extractor.push_wrench_one
         try:
-            try:
-                frames = push(t=t, values=values)
-            except TimeJumpError as err:
-                self.counts['time_jumps'] += 1
-                self.last_error = f'time jumped backwards, state reset: {err}'
-                self.reset()
-                frames = push(t=t, values=values)
+            frames = self._with_jump_reset(
+                lambda: self.extractor.push_wrench_one(t=t, values=values))
         except InputError as err:
             stamp = t if isinstance(t, (int, float)) else None
             return self.drop(kind='wrench', reason=str(err), stamp=stamp)

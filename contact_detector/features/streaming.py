@@ -1018,9 +1018,7 @@ class StreamingFeatureExtractor:
             keep = self.history_frames
             self._ft_ts.extend(ft_t[-keep:])
             self._ft_xs.extend(ft_x[-keep:])
-            self._ft_ts.keep_last(keep)
-            self._ft_xs.keep_last(keep)
-            self._ft_t, self._ft_x = self._ft_ts.view, self._ft_xs.view
+            self._trim_ft_history()
         return self._drain(force=False)
 
     def push_wrench_one(self, *, t: float, values: Sequence[float]) -> FeatureFrames:
@@ -1055,13 +1053,16 @@ class StreamingFeatureExtractor:
             raise InputError('wrench contains NaN or Inf')
         frame = self.ft.push_one(t=t, values=values)
         if frame is not None:
-            keep = self.history_frames
             self._ft_ts.append(frame[0])
             self._ft_xs.append(frame[1])
-            self._ft_ts.keep_last(keep)
-            self._ft_xs.keep_last(keep)
-            self._ft_t, self._ft_x = self._ft_ts.view, self._ft_xs.view
+            self._trim_ft_history()
         return self._drain(force=False)
+
+    def _trim_ft_history(self) -> None:
+        # Keep history_s of F/T feature frames; _ft_t/_ft_x are the kept rows, for _drain.
+        self._ft_ts.keep_last(self.history_frames)
+        self._ft_xs.keep_last(self.history_frames)
+        self._ft_t, self._ft_x = self._ft_ts.view, self._ft_xs.view
 
     def flush(self) -> FeatureFrames:
         """Emit every pending frame with the F/T data there is (end of a recording)."""
