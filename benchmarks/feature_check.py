@@ -12,7 +12,11 @@ features computed once.
 ``--compare deltas`` (round 3): the shipped features with other ``delta_window`` /
 ``delta_lag`` (the F/T change is the newest ``delta_window`` samples against the samples
 ``delta_lag`` earlier), features computed once per setting.
-``--compare sustain`` (round 3): the shipped features, the slow path's threshold and length.
+``--compare sustain`` (rounds 3 and 4): the shipped features, the slow path's threshold and
+length.
+``--compare audio`` (round 4): round 3's features with and without the audio onset features
+``audio_rise_db`` / ``audio_peak_gap_db`` (and ``rise_frames``), features computed once per
+``rise_frames``.
 
     python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
@@ -35,14 +39,19 @@ from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_fo
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
+#: The eight extras of rounds 2 and 3 (round 4 added the two audio onset features).
+EIGHT = BEFORE + ('ft_delta_angle',) + CHANGE
+ONSET = ('audio_rise_db', 'audio_peak_gap_db')
 #: The shipped rule since round 2, written out: the tables in docs/sweep.md do not move with
 #: DEFAULT_RULE.
 ROUND2_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                            sustain_frames=15, sustain_threshold=0.5)
 #: Its fast path without unanimity: 9 of the 10 trees.
 FAST_RULE = replace(ROUND2_RULE, threshold=0.9)
+#: Round 3's features (the eight extras, the shortened change windows).
+ROUND3 = replace(DEFAULT_FEATURES, extra_features=EIGHT)
 #: Round 2's change windows (round 3 shortened them); ``--compare features`` reproduces round 2.
-ROUND2 = replace(DEFAULT_FEATURES, delta_window=3, delta_lag=10)
+ROUND2 = replace(ROUND3, delta_window=3, delta_lag=10)
 
 
 def feature_settings() -> List[FeatureSetting]:
@@ -54,7 +63,7 @@ def feature_settings() -> List[FeatureSetting]:
         subset('four extras (the previous default)', BEFORE),
         subset('four extras + ft_delta_angle', BEFORE + ('ft_delta_angle',)),
         subset('median-baseline changes instead of the deltas', BEFORE[:2] + CHANGE),
-        subset('all eight extras (shipped)', DEFAULT_FEATURES.extra_features),
+        subset('all eight extras (round 2)', EIGHT),
     ]
 
 
@@ -76,14 +85,29 @@ def sustain_rules() -> List[DecisionRule]:
 
 
 def delta_configs() -> List[tuple]:
-    """(name, config): the round-2 windows, the shipped ones and their neighbours."""
+    """(name, config): the round-2 windows, round 3's and their neighbours (eight extras)."""
     def windows(window: int, lag: int) -> FeatureConfig:
-        return replace(DEFAULT_FEATURES, delta_window=window, delta_lag=lag)
+        return replace(ROUND3, delta_window=window, delta_lag=lag)
     return [('delta_window 3, delta_lag 10 (round 2)', windows(3, 10)),
             ('delta_window 2, delta_lag 10', windows(2, 10)),
             ('delta_window 1, delta_lag 10', windows(1, 10)),
-            ('delta_window 1, delta_lag 5 (shipped)', windows(1, 5)),
+            ('delta_window 1, delta_lag 5 (round 3, shipped)', windows(1, 5)),
             ('delta_window 1, delta_lag 3', windows(1, 3))]
+
+
+def audio_settings(rise_frames: int) -> List[FeatureSetting]:
+    """Round 3's features, plus one or both audio onset features, at one ``rise_frames``."""
+    config = replace(DEFAULT_FEATURES, extra_features=EIGHT + ONSET, rise_frames=rise_frames)
+    shipped = rise_frames == DEFAULT_FEATURES.rise_frames
+
+    def subset(name: str, extras: tuple) -> FeatureSetting:
+        return FeatureSetting(name, config, DEFAULT_LABELS, columns=PAPER_FEATURES + extras)
+    if not shipped:
+        return [subset(f'+ both, rise_frames {rise_frames}', EIGHT + ONSET)]
+    return [subset('round 3 (eight extras)', EIGHT),
+            subset(f'+ audio_rise_db (rise_frames {rise_frames})', EIGHT + ONSET[:1]),
+            subset('+ audio_peak_gap_db', EIGHT + ONSET[1:]),
+            subset(f'+ both (shipped, rise_frames {rise_frames})', EIGHT + ONSET)]
 
 
 def _frames(folders: List[str], config: FeatureConfig, jobs: int) -> list:
@@ -128,7 +152,7 @@ def main() -> int:
     parser.add_argument('heldout', nargs='+', help='held-out folders')
     parser.add_argument('--seeds', default='0,1,2,3', help='forest seeds, comma-separated')
     parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--compare', choices=('features', 'deltas', 'sustain'),
+    parser.add_argument('--compare', choices=('features', 'deltas', 'sustain', 'audio'),
                         default='features')
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(',')]
@@ -148,6 +172,15 @@ def main() -> int:
         _rows(setting, _frames([args.train], DEFAULT_FEATURES, args.jobs),
               _frames(args.heldout, DEFAULT_FEATURES, args.jobs), sustain_rules(), seeds,
               args.jobs)
+        return 0
+    if args.compare == 'audio':
+        for rise_frames in (DEFAULT_FEATURES.rise_frames, 1, 3):
+            settings = audio_settings(rise_frames)
+            config = settings[0].config
+            train = _frames([args.train], config, args.jobs)
+            heldout = _frames(args.heldout, config, args.jobs)
+            for setting in settings:
+                _rows(setting, train, heldout, [ROUND2_RULE, FAST_RULE], seeds, args.jobs)
         return 0
     for name, config in delta_configs():
         setting = FeatureSetting(name, config, DEFAULT_LABELS)

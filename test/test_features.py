@@ -11,6 +11,7 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
                                        TimeJumpError)
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
+from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.features.streaming import ForceTorqueStream
 
 T0 = 1_700_000_000.0
@@ -171,7 +172,11 @@ configs = st.builds(
         (), ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta'),
         ('audio_peak_rel_db',), ('ft_delta_angle',),
         ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta',
-         'ft_delta_angle'), ('torque_change', 'ft_change_angle', 'force_delta')]),
+         'ft_delta_angle'), ('torque_change', 'ft_change_angle', 'force_delta'),
+        ('audio_rise_db',), ('audio_peak_gap_db', 'audio_rise_db', 'force_change'),
+        EXTRA_FEATURES]),
+    rise_frames=st.sampled_from([1, 2, 3, 12]),
+    peak_frames=st.sampled_from([1, 4, 10]),
 )
 
 
@@ -282,6 +287,29 @@ def test_features_use_no_future_samples():
     before = ref.t <= cut
     np.testing.assert_array_equal(ref.x[before], changed.x[before])
     assert not np.array_equal(ref.x[~before], changed.x[~before])
+
+
+def test_audio_rise_and_peak_gap_tell_a_sound_starting_from_one_decaying():
+    # silence, then a knock at 0.5 s that decays over ~0.1 s
+    rate = 16000
+    n = np.arange(rate)
+    audio = np.where(n >= rate // 2, 0.5 * np.exp(-(n - rate // 2) / (0.03 * rate)), 0.0)
+    audio = audio * np.sin(2 * np.pi * 2000 * n / rate)
+    config = FeatureConfig(extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
+                                           'audio_rise_db', 'audio_peak_gap_db'))
+    extractor = StreamingFeatureExtractor(config=config, audio_rate=rate)
+    ft_t = T0 + np.arange(101) / 100
+    frames = stream(extractor=extractor, audio=audio, audio_rate=rate, ft_t=ft_t,
+                    force=np.zeros((101, 3)), torque=np.zeros((101, 3)),
+                    audio_chunks=[160] * 100, ft_chunks=[1] * 101)
+    t = frames.t - T0
+    rise = frames.x[:, config.feature_names.index('audio_rise_db')]
+    gap = frames.x[:, config.feature_names.index('audio_peak_gap_db')]
+    assert np.all(rise[t < 0.5] == 0) and np.all(gap[t < 0.5] == 0)     # silence: zeros
+    starting = (t > 0.5) & (t <= 0.52)
+    assert np.all(rise[starting] > 10) and np.all(gap[starting] == 0)
+    decaying = (t > 0.56) & (t < 0.62)
+    assert np.all(rise[decaying] < -1) and np.all(gap[decaying] > 1)
 
 
 def test_silence_streams_finite_features():
@@ -398,13 +426,14 @@ def test_config_validation_names_the_field():
 
 
 def test_a_config_saved_before_baseline_window_existed_loads_with_the_same_features():
-    # the first-round model files carry no baseline_window: they must load, and compute the
-    # same features as before (the field only affects the *_change features)
+    # the first-round model files carry no baseline_window (and no rise_frames): they must
+    # load, and compute the same features as before (the fields only affect the *_change and
+    # audio_rise_db features)
     old = FeatureConfig(ft_window=64, ft_detrend='mean',
                         extra_features=('force_delta', 'torque_delta')).to_dict()
-    del old['baseline_window']
+    del old['baseline_window'], old['rise_frames']
     config = FeatureConfig.from_dict(old)
-    assert config.baseline_window == 15
+    assert config.baseline_window == 15 and config.rise_frames == 2
     assert config.feature_names[-2:] == ('force_delta', 'torque_delta')
     assert ForceTorqueStream(config=config, input_rate=100.0).history == 64
 

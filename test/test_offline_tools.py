@@ -324,6 +324,23 @@ def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
     assert metrics['forest']['frames']['contact']['support'] > 0
 
 
+def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
+    # two simulated folders both have a trial_0000; each must be scored against its own onset
+    other = tmp_path / 'other'
+    trials = list(simulate_trials(n=1, seed=SEED + 1, conditions=['paper']))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=other / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=other)
+    report = tmp_path / 'report'
+    assert cli_main.main(['evaluate', str(data['bags'] / 'trial_0000'), str(other),
+                          '--model', str(data['model']), '--report', str(report)]) == 0
+    rows = json.loads((report / 'trials.json').read_text())['forest']
+    onsets = [data['trials']['trial_0000'].onset_t, trials[0].onset_t]
+    assert [r['name'] for r in rows] == ['trial_0000', 'trial_0000']
+    assert abs(onsets[0] - onsets[1]) > 0.05
+    assert [r['onset_t'] for r in rows] == pytest.approx(onsets, rel=0, abs=1e-6)
+
+
 # --- metrics on hand-made truths ----------------------------------------------------------------
 
 def test_score_trial_verdicts():
@@ -519,12 +536,13 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
                            '--threshold', '0.85', '--confirm-frames', '1',
                            '--sustain-frames', '10', '--sustain-threshold', '0.4',
                            '--delta-window', '2', '--delta-lag', '4', '--baseline-window', '9',
-                           '--out', str(model)]) == 0
+                           '--rise-frames', '3', '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     # Without options, train uses the shipped features; the F/T change windows are options.
     assert data['bundle'].feature_config == train_cli.DEFAULT_FEATURES
-    assert (bundle.feature_config.delta_window, bundle.feature_config.delta_lag,
-            bundle.feature_config.baseline_window) == (2, 4, 9)
+    config = bundle.feature_config
+    assert (config.delta_window, config.delta_lag, config.baseline_window,
+            config.rise_frames) == (2, 4, 9, 3)
     table = bundle.metrics['trial']['validation']
     assert [row['n_estimators'] for row in table] == [2, 4, 5]
     assert bundle.forest.n_estimators == bundle.metrics['trial']['best_n_estimators']
@@ -542,3 +560,31 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
         with pytest.raises(SystemExit):
             train_cli.main([str(data['bags']), '--trees', bad, '--out', str(model)])
     capsys.readouterr()
+
+
+# --- sweep ------------------------------------------------------------------------------------
+
+def test_sweep_ablation_scores_each_slow_path_threshold(data, tmp_path, capsys):
+    from contact_detector.cli import sweep as sweep_cli
+    out = tmp_path / 'ablation.md'
+    bags = str(data['bags'])
+    assert sweep_cli.main([bags, bags, '--grid', 'none', '--ablation', '--ablation-sustain',
+                           '0.5,0.3', '--jobs', '1', '--out', str(out)]) == 0
+    rows = [[cell.strip() for cell in line.strip('|').split('|')]
+            for line in out.read_text().splitlines() if line.startswith('| ')][1:]
+    rows = [r for r in rows if not r[0].startswith('---')]
+    by_key = {(r[0], r[1], r[2]): r for r in rows}
+    settings = {r[0] for r in rows}
+    assert len(settings) == len(sweep_cli.ablation_settings())
+    assert {r[2] for r in rows} == {'mean15>=0.5', 'mean15>=0.3'}
+    for setting, condition, slow in by_key:
+        if slow != 'mean15>=0.5':
+            continue
+        strict, loose = by_key[setting, condition, slow], by_key[setting, condition,
+                                                                 'mean15>=0.3']
+        # a lower slow-path threshold makes more frames contact: it can only release sooner
+        released = [int(r[3].split('/')[0]) + int(r[4]) for r in (strict, loose)]
+        assert int(loose[4]) >= int(strict[4]) and released[1] >= released[0]
+    with pytest.raises(SystemExit):
+        sweep_cli.main([bags, bags, '--grid', 'none', '--ablation', '--ablation-sustain', '2'])
+    assert 'thresholds must be in [0, 1]' in capsys.readouterr().err

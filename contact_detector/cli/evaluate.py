@@ -35,7 +35,7 @@ DETECTORS = ('forest',) + BASELINES
 
 def truth_for(bag: Path, events, manifest: dict) -> Truth:
     """Ground truth of one bag: the manifest's entry, else the truth topic."""
-    info = manifest.get(bag.name)
+    info = manifest.get(bag)
     if info is not None:
         return Truth(name=bag.name, condition=info.get('condition', ''),
                      onset_t=float(info['onset_t']), contact_end_t=info.get('contact_end_t'),

@@ -29,6 +29,9 @@ from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetti
 from contact_detector.model.training import LabelWindow
 
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
+#: The audio features measured against the tracked noise floor, and the two of round 4.
+ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
+RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
 ONSET = LabelWindow(0.0, 0.1)
 STATE = LabelWindow(0.0, 0.3)
 
@@ -82,10 +85,13 @@ def ablation_settings() -> List[FeatureSetting]:
                        columns=tuple(n for n in full.feature_names if n != 'ft_delta_angle')),
         FeatureSetting('shipped, without raw audio power', full, STATE,
                        columns=tuple(n for n in full.feature_names if n != 'audio_power')),
+        FeatureSetting('shipped, without the audio onset features (round 3)', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in ONSET_AUDIO)),
         FeatureSetting('shipped, without the dB-above-floor features', full, STATE,
-                       columns=tuple(n for n in full.feature_names if 'rel_db' not in n)),
-        FeatureSetting('audio only (power, dB above floor, recent peak)', full, STATE,
-                       columns=('audio_power', 'audio_power_rel_db', 'audio_peak_rel_db')),
+                       columns=tuple(n for n in full.feature_names
+                                     if n not in RELATIVE_AUDIO)),
+        FeatureSetting('audio only (power, dB above floor, its peak, rise and gap)', full, STATE,
+                       columns=('audio_power',) + RELATIVE_AUDIO),
         FeatureSetting('F/T only', full, STATE,
                        columns=tuple(n for n in full.feature_names
                                      if not n.startswith('audio'))),
@@ -95,6 +101,17 @@ def ablation_settings() -> List[FeatureSetting]:
                                 'torque_spread', 'force_delta', 'torque_delta',
                                 'ft_delta_angle')),
     ]
+
+
+def thresholds(text: str) -> List[float]:
+    """Parse ``0.5,0.4`` into thresholds in [0, 1] (argparse type)."""
+    try:
+        values = [float(v) for v in text.split(',') if v.strip()]
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'not a list of numbers: {text!r}') from err
+    if not values or any(not 0.0 <= v <= 1.0 for v in values):
+        raise argparse.ArgumentTypeError(f'thresholds must be in [0, 1], got {text!r}')
+    return values
 
 
 def decode(bags, spec, tag):
@@ -116,6 +133,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
+    parser.add_argument('--ablation-sustain', type=thresholds,
+                        default=[DEFAULT_RULE.sustain_threshold],
+                        help='slow-path thresholds scored in the ablation, comma-separated '
+                             f'(default {DEFAULT_RULE.sustain_threshold})')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--audio-rate', type=float, default=16000.0)
@@ -164,11 +185,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 def ablation(train, heldout, args) -> str:
     """Leave-one-condition-out table for the ablation settings (the default rule)."""
     everything = {**train, **heldout}
-    rule = [DEFAULT_RULE]
-    lines = [f'Rule: {DEFAULT_RULE.short()}; forest of 10 trees trained on every trial of '
-             'the other condition sets.', '',
-             '| setting | held-out condition | detected | premature | impact events | '
-             'latency median [ms] |', '|---|---|---|---|---|---|']
+    rules = [replace(DEFAULT_RULE, sustain_threshold=th) for th in args.ablation_sustain]
+    lines = [f'Rule: {DEFAULT_RULE.short()} (slow-path thresholds '
+             f"{', '.join(str(th) for th in args.ablation_sustain)}); forest of 10 trees "
+             'trained on every trial of the other condition sets.', '',
+             '| setting | held-out condition | slow path | detected | premature | '
+             'impact events | latency median [ms] |', '|---|---|---|---|---|---|---|']
     cache = {}
     for setting in tqdm(ablation_settings(), desc='ablation', unit='setting'):
         if setting.config not in cache:
@@ -183,10 +205,15 @@ def ablation(train, heldout, args) -> str:
                 continue
             forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=args.seed,
                                 jobs=args.jobs)
-            s = score_rules(forest=forest, frames=test, setting=setting, rules=rule)[0].summary
-            median = '-' if s['latency_ms_median'] is None else f"{s['latency_ms_median']:.0f}"
-            lines.append(f"| {setting.name} | {condition} | {s['detected']}/{s['trials']} | "
-                         f"{s['premature']} | {s['impact_events']} | {median} |")
+            scored = score_rules(forest=forest, frames=test, setting=setting, rules=rules)
+            for rule, row in zip(rules, scored):
+                s = row.summary
+                median = ('-' if s['latency_ms_median'] is None
+                          else f"{s['latency_ms_median']:.0f}")
+                slow = f'mean{rule.sustain_frames}>={rule.sustain_threshold}'
+                lines.append(f'| {setting.name} | {condition} | {slow} | '
+                             f"{s['detected']}/{s['trials']} | {s['premature']} | "
+                             f"{s['impact_events']} | {median} |")
     return '\n'.join(lines)
 
 

@@ -33,16 +33,17 @@ from contact_detector.model.training import (LabelWindow, read_labels_csv, run_s
                                              trial_features)
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
-#: sample with its mean removed, the eight extra features, labels covering the first 0.3 s of
+#: sample with its mean removed, the ten extra features, labels covering the first 0.3 s of
 #: the contact; release at the first frame where every tree says contact (p >= 0.95 with 10
 #: trees), or when the mean P(contact) of the last 15 frames reaches 0.5 (quiet contacts). The
 #: paper's settings (W160/H128, 7 features, 0.1 s labels) are one row of that table.
 DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
-                                 delta_window=1, delta_lag=5,
+                                 delta_window=1, delta_lag=5, rise_frames=2,
                                  extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
                                                  'force_delta', 'torque_delta',
                                                  'ft_delta_angle', 'force_change',
-                                                 'torque_change', 'ft_change_angle'))
+                                                 'torque_change', 'ft_change_angle',
+                                                 'audio_rise_db', 'audio_peak_gap_db'))
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
 DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.5)
@@ -67,6 +68,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--baseline-window', type=int, default=d.baseline_window,
                         help='samples in the median baseline of the *_change features '
                              f'(default {d.baseline_window})')
+    parser.add_argument('--rise-frames', type=int, default=d.rise_frames,
+                        help='audio frames back to the reference of audio_rise_db '
+                             f'(default {d.rise_frames})')
     parser.add_argument('--extra-features', default=','.join(d.extra_features),
                         help='comma-separated extra features, from '
                              f"{', '.join(EXTRA_FEATURES)}")
@@ -114,17 +118,22 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     return FeatureConfig(ft_window=args.ft_window, ft_hop=args.ft_hop,
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
-                         baseline_window=args.baseline_window, extra_features=extra)
+                         baseline_window=args.baseline_window, rise_frames=args.rise_frames,
+                         extra_features=extra)
 
 
 def conditions_of(bags: Sequence[Path]) -> dict:
-    """Map bag name -> condition from manifests beside the bags, where there are any."""
+    """
+    Map bag path -> its manifest entry, from manifests beside the bags, where there are any.
+
+    Keyed by path, not name: two simulated folders both have a ``trial_0000``.
+    """
     out = {}
     for parent in {b.parent for b in bags}:
         manifest = parent / 'manifest.json'
         if manifest.exists():
             for trial in json.loads(manifest.read_text()).get('trials', []):
-                out[trial['name']] = trial
+                out[parent / trial['name']] = trial
     return out
 
 
@@ -193,7 +202,7 @@ def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec
         detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
             audio_rate=audio_rate, wrench_rate=wrench_rate))
         run = run_detector(events, detector=detector)
-        info = manifest.get(bag.name)
+        info = manifest.get(bag)
         if info is None:
             continue
         truth = Truth(name=bag.name, condition=info.get('condition', ''),
@@ -253,7 +262,7 @@ def _train(args: argparse.Namespace) -> int:
         return trial_features(bag=bag, config=config, spec=spec, audio_rate=args.audio_rate,
                               wrench_rate=args.wrench_rate, label_window=labels,
                               onsets=csv_onsets[bag.name] if csv_onsets else None,
-                              condition=manifest.get(bag.name, {}).get('condition', ''))
+                              condition=manifest.get(bag, {}).get('condition', ''))
 
     trials = Parallel(n_jobs=args.jobs)(
         delayed(one)(bag) for bag in tqdm(bags, desc='features', unit='bag'))

@@ -32,7 +32,8 @@ from contact_detector.detection.detector import (AudioRateCheck, CLIP_LEVEL, Con
                                                  Decisions)
 from contact_detector.errors import InputError
 from contact_detector.features import spectral
-from contact_detector.features.streaming import (FeatureFrames, frame_ends, NoiseFloor,
+from contact_detector.features.config import AUDIO_FEATURES
+from contact_detector.features.streaming import (FeatureFrames, frame_ends,
                                                  StreamingFeatureExtractor, to_unit_audio)
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
 
@@ -159,10 +160,8 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
         block = ends[lo:lo + POWER_BLOCK]
         power[lo:lo + block.size] = spectral.audio_power(
             frames=samples[(block - w)[:, None] + framer._offsets])
-    needs_rel = ex._rel_idx is not None or ex._peak_idx is not None
-    rel = (spectral.power_db_above_floor(power=power, floor=NoiseFloor(
-        config=ex.config).update(power)) if needs_rel else np.zeros_like(power))
-    peak = ex._recent_peak(rel) if ex._peak_idx is not None else rel
+    per_frame = ex.audio_rows(power)
+    audio = np.array(per_frame) if per_frame else np.zeros((0, len(AUDIO_FEATURES)))
 
     # --- F/T: one push of every sample (no gaps: checked by the scan) -----------------------
     if wt.size:
@@ -197,11 +196,8 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
     valid = idx >= oldest_kept
     valid[valid] &= (t[valid] - ft_t[idx[valid]]) <= ex.max_ft_age_s
     x = np.zeros((t.size, len(ex.names)))
-    x[:, 0] = power
-    if ex._rel_idx is not None:
-        x[:, ex._rel_idx] = rel
-    if ex._peak_idx is not None:
-        x[:, ex._peak_idx] = peak
+    for col, k in ex._audio_cols:
+        x[:, col] = audio[:, k]
     if valid.any():
         rows = np.flatnonzero(valid)[:, None]
         x[rows, ex._ft_dst] = ft_x[idx[valid]][:, ex._ft_col]

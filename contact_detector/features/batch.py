@@ -12,7 +12,7 @@ from typing import Optional
 import numpy as np
 
 from contact_detector.features import spectral
-from contact_detector.features.config import DELTA_FEATURES, FeatureConfig
+from contact_detector.features.config import AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig
 from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
 
 
@@ -186,16 +186,19 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
     x = np.zeros((t_a.size, len(names)))
     valid = np.zeros(t_a.size, dtype=bool)
     rel = None
-    if 'audio_power_rel_db' in names or 'audio_peak_rel_db' in names:
+    if any(name in names for name in AUDIO_FEATURES[1:]):
         rel = spectral.power_db_above_floor(power=power,
                                             floor=batch_noise_floor(config=config, power=power))
     for i, t in enumerate(t_a):
         x[i, 0] = power[i]
-        if 'audio_power_rel_db' in names:
-            x[i, names.index('audio_power_rel_db')] = rel[i]
-        if 'audio_peak_rel_db' in names:
-            x[i, names.index('audio_peak_rel_db')] = rel[max(0, i - config.peak_frames + 1):
-                                                         i + 1].max()
+        if rel is not None:
+            peak = rel[max(0, i - config.peak_frames + 1):i + 1].max()
+            audio = {'audio_power_rel_db': rel[i], 'audio_peak_rel_db': peak,
+                     'audio_rise_db': rel[i] - rel[max(0, i - config.rise_frames)],
+                     'audio_peak_gap_db': peak - rel[i]}
+            for name, value in audio.items():
+                if name in names:
+                    x[i, names.index(name)] = value
         before = np.flatnonzero(ft_times <= t)
         if before.size and t - ft_times[before[-1]] <= age:
             valid[i] = True

@@ -36,9 +36,16 @@ PAPER_FEATURES = (
 #: and knocks on the hand near the sensor. ``*_change`` and ``ft_change_angle`` are the same
 #: against a robust baseline: the median of the ``baseline_window`` samples ending ``delta_lag``
 #: samples earlier, so that a short knock does not come back 0.1 s later as an opposite change.
+#: ``audio_rise_db`` is ``audio_power_rel_db`` minus its value ``rise_frames`` audio frames
+#: earlier (dB; > 0 while a sound starts, < 0 while it decays) and ``audio_peak_gap_db`` is
+#: ``audio_peak_rel_db - audio_power_rel_db`` (dB below the recent peak): together they tell a
+#: sound that starts with the F/T change (the touch) from the tail of an earlier one (a knock,
+#: then the arm braking).
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
+    'audio_rise_db',
+    'audio_peak_gap_db',
     'force_delta',
     'torque_delta',
     'ft_delta_angle',
@@ -46,6 +53,10 @@ EXTRA_FEATURES = (
     'torque_change',
     'ft_change_angle',
 )
+
+#: Features computed from the audio alone, in the order a pending frame stores them.
+AUDIO_FEATURES = ('audio_power', 'audio_power_rel_db', 'audio_peak_rel_db', 'audio_rise_db',
+                  'audio_peak_gap_db')
 
 #: Extra features computed from changes of |F| and |T| (they need ``delta_lag`` of history).
 DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change',
@@ -92,6 +103,8 @@ class FeatureConfig:
         Time constant in seconds with which the audio noise floor rises (it falls at once).
     peak_frames : int
         Audio frames over which ``audio_peak_rel_db`` takes its maximum.
+    rise_frames : int
+        Distance in audio frames between the two values of ``audio_rise_db``.
 
     """
 
@@ -108,6 +121,7 @@ class FeatureConfig:
     baseline_window: int = 15
     noise_floor_tau_s: float = 2.0
     peak_frames: int = 10
+    rise_frames: int = 2
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -119,7 +133,8 @@ class FeatureConfig:
                 raise ConfigError(f'FeatureConfig.{name} must be a finite number > 0, '
                                   f'got {value!r}')
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
-                          ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1)):
+                          ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1),
+                          ('rise_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')

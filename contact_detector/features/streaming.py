@@ -25,7 +25,8 @@ import numpy as np
 
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
-from contact_detector.features.config import DELTA_FEATURES, FeatureConfig, PAPER_FEATURES
+from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
+                                              PAPER_FEATURES)
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
@@ -887,10 +888,10 @@ class StreamingFeatureExtractor:
         self.history_frames = max(16, int(history_s * config.ft_rate_hz / config.ft_hop))
         self._ft_dst = np.array([i for i, n in enumerate(self.names) if n in self.ft.columns])
         self._ft_col = np.array([self.ft.columns.index(self.names[i]) for i in self._ft_dst])
-        self._rel_idx = (self.names.index('audio_power_rel_db')
-                         if 'audio_power_rel_db' in self.names else None)
-        self._peak_idx = (self.names.index('audio_peak_rel_db')
-                          if 'audio_peak_rel_db' in self.names else None)
+        # (column, position in a pending frame's audio tuple) of each audio feature used
+        self._audio_cols = [(self.names.index(name), k) for k, name in enumerate(AUDIO_FEATURES)
+                            if name in self.names]
+        self._needs_rel = any(k > 0 for _, k in self._audio_cols)
         self._ft_ts = TailBuffer(capacity=self.history_frames + 64)
         self._ft_xs = TailBuffer(capacity=self.history_frames + 64, width=len(self.ft.columns))
         self._empty = FeatureFrames.empty(self.names)
@@ -909,9 +910,10 @@ class StreamingFeatureExtractor:
         self._ft_x = self._ft_xs.view       # and their features
         # Frames waiting for F/T, in Python numbers (one or two at a time live).
         self._pend_t: list = []             # end times
-        self._pend_a: list = []             # (power, dB above floor, recent peak of that)
+        self._pend_a: list = []             # one tuple per frame, in AUDIO_FEATURES' order
         self._pend_arrival: list = []       # audio time of the chunk that completed them
         self._rel_hist = [-math.inf] * (self.config.peak_frames - 1)
+        self._rise_hist: list = []          # the newest rise_frames dB values, oldest first
 
     @property
     def pending(self) -> int:
@@ -954,23 +956,53 @@ class StreamingFeatureExtractor:
         """
         t, power = self.audio.push(unit, stamp=stamp)
         if t.size:
-            needs_rel = self._rel_idx is not None or self._peak_idx is not None
-            rel = (spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
-                   if needs_rel else np.zeros_like(power))
-            rel_values = rel.tolist()
-            if self._peak_idx is None:
-                peak = rel_values
-            elif t.size == 1:
-                # _recent_peak for one frame in Python floats (max picks one of the values)
-                history = self._rel_hist + rel_values
-                self._rel_hist = history[1:]
-                peak = [max(history)]
-            else:
-                peak = self._recent_peak(rel).tolist()
+            self._pend_a.extend(self.audio_rows(power))
             self._pend_t.extend(t.tolist())
-            self._pend_a.extend(zip(power.tolist(), rel_values, peak))
             self._pend_arrival.extend([self.audio.latest_time] * t.size)
         return self._drain(force=False)
+
+    def audio_rows(self, power: np.ndarray) -> list:
+        """
+        Compute the audio features of the next frames (updates the noise floor and histories).
+
+        Parameters
+        ----------
+        power : np.ndarray, shape (n,)
+            Audio power of the next ``n`` frames (eq. 1).
+
+        Returns
+        -------
+        list of tuple
+            Per frame, the values of :data:`AUDIO_FEATURES` in that order: all five when any
+            extra audio feature is configured, else ``(power,)``.
+
+        """
+        if not self._needs_rel:
+            return [(p,) for p in power.tolist()]
+        rel = spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
+        rel_values = rel.tolist()
+        if power.size == 1:
+            # _recent_peak for one frame in Python floats (max picks one of the values)
+            history = self._rel_hist + rel_values
+            self._rel_hist = history[1:]
+            peak = [max(history)]
+        else:
+            peak = self._recent_peak(rel).tolist()
+        return list(zip(power.tolist(), rel_values, peak, self._rise(rel_values),
+                        [pk - r for pk, r in zip(peak, rel_values)]))
+
+    def _rise(self, rel_values: list) -> list:
+        # audio_rise_db: each value minus the one rise_frames frames earlier (the oldest one
+        # there while fewer frames have been seen), across chunk boundaries.
+        history = self._rise_hist
+        k = self.config.rise_frames
+        rise = []
+        for value in rel_values:
+            rise.append(value - history[0] if history else 0.0)
+            history.append(value)
+            if len(history) > k:
+                del history[0]
+        return rise
 
     def _recent_peak(self, rel: np.ndarray) -> np.ndarray:
         # Running maximum over the newest peak_frames values, across chunk boundaries.
@@ -1092,11 +1124,8 @@ class StreamingFeatureExtractor:
         t = np.array(t)
         audio = np.array(audio)
         x = np.zeros((count, len(self.names)))
-        x[:, 0] = audio[:, 0]
-        if self._rel_idx is not None:
-            x[:, self._rel_idx] = audio[:, 1]
-        if self._peak_idx is not None:
-            x[:, self._peak_idx] = audio[:, 2]
+        for col, k in self._audio_cols:
+            x[:, col] = audio[:, k]
         idx = np.searchsorted(self._ft_t, t, side='right') - 1
         valid = idx >= 0
         valid[valid] &= (t[valid] - self._ft_t[idx[valid]]) <= self.max_ft_age_s
@@ -1109,11 +1138,8 @@ class StreamingFeatureExtractor:
         # _drain's alignment for one frame, in Python numbers.
         x = np.zeros((1, len(self.names)))
         row = x[0]
-        row[0] = audio[0]
-        if self._rel_idx is not None:
-            row[self._rel_idx] = audio[1]
-        if self._peak_idx is not None:
-            row[self._peak_idx] = audio[2]
+        for col, k in self._audio_cols:
+            row[col] = audio[k]
         ft_t = self._ft_t
         idx = int(np.searchsorted(ft_t, t, side='right')) - 1
         valid = idx >= 0 and t - float(ft_t[idx]) <= self.max_ft_age_s
