@@ -39,8 +39,8 @@ PAPER_FEATURES = (
 #: ``audio_rise_db`` is ``audio_power_rel_db`` minus its value ``rise_frames`` audio frames
 #: earlier (dB; > 0 while a sound starts, < 0 while it decays) and ``audio_peak_gap_db`` is
 #: ``audio_peak_rel_db - audio_power_rel_db`` (dB below the recent peak): together they tell a
-#: sound that starts with the F/T change (the touch) from the tail of an earlier one (a knock,
-#: then the arm braking).
+#: sound that starts with the F/T change (the touch) from the tail of an earlier one (a knock
+#: shortly before an F/T change that only looks like unloading).
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
