@@ -21,6 +21,7 @@ from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.cli import main as cli_main
+from contact_detector.cli import sweep as sweep_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.errors import ConfigError
@@ -565,7 +566,6 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
 # --- sweep ------------------------------------------------------------------------------------
 
 def test_sweep_ablation_scores_each_slow_path_threshold(data, tmp_path, capsys):
-    from contact_detector.cli import sweep as sweep_cli
     out = tmp_path / 'ablation.md'
     bags = str(data['bags'])
     assert sweep_cli.main([bags, bags, '--grid', 'none', '--ablation', '--ablation-sustain',

@@ -59,18 +59,14 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--ft-detrend', choices=('none', 'mean'), default=d.ft_detrend,
                         help=f"remove each F/T window's mean (default {d.ft_detrend})")
     parser.add_argument('--ft-window-fn', choices=('rect', 'hann'), default=d.ft_window_fn)
-    parser.add_argument('--delta-window', type=int, default=d.delta_window,
-                        help='F/T change features: newest samples averaged '
-                             f'(default {d.delta_window})')
-    parser.add_argument('--delta-lag', type=int, default=d.delta_lag,
-                        help='F/T change features: samples back to the reference '
-                             f'(default {d.delta_lag})')
-    parser.add_argument('--baseline-window', type=int, default=d.baseline_window,
-                        help='samples in the median baseline of the *_change features '
-                             f'(default {d.baseline_window})')
-    parser.add_argument('--rise-frames', type=int, default=d.rise_frames,
-                        help='audio frames back to the reference of audio_rise_db '
-                             f'(default {d.rise_frames})')
+    for field, text in (('delta_window', 'F/T change features: newest samples averaged'),
+                        ('delta_lag', 'F/T change features: samples back to the reference'),
+                        ('baseline_window',
+                         'samples in the median baseline of the *_change features'),
+                        ('rise_frames', 'audio frames back to the reference of audio_rise_db')):
+        default = getattr(d, field)
+        parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
+                            help=f'{text} (default {default})')
     parser.add_argument('--extra-features', default=','.join(d.extra_features),
                         help='comma-separated extra features, from '
                              f"{', '.join(EXTRA_FEATURES)}")
