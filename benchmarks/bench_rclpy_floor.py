@@ -21,6 +21,10 @@ the executor, Fast DDS's receive and event threads) over wall time is measured i
 ``raw_udp``         ``waitset_raw`` with ``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` (subscriber)
 ``poll_10ms_raw``   sleep 10 ms, then take everything (batching: adds up to 10 ms latency;
                     a reference only, the node's latency target excludes it)
+``echo_raw``        ``waitset_raw``, and for each audio chunk the node's two per-frame outputs
+                    published as CDR bytes (``contact`` Bool, ``contact_probability``
+                    Float32, reliable, as the node does) to a listener in the publisher
+                    process: the floor of the node's whole interface with no work at all
 ==================  =========================================================================
 
 All variants run in each round (rounds repeated ``--repeats`` times, variants interleaved) so
@@ -61,7 +65,15 @@ VARIANTS = {
     'raw_shm': {'FASTDDS_BUILTIN_TRANSPORTS': 'SHM'},
     'raw_udp': {'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'},
     'poll_10ms_raw': {},
+    'echo_raw': {},
 }
+
+
+def _output_qos():
+    """Return the node's output QoS (reliable, depth ``node.OUTPUT_DEPTH``)."""
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                      reliability=ReliabilityPolicy.RELIABLE)
 
 
 def _cpu_busy() -> tuple:
@@ -77,12 +89,18 @@ def publish(args: argparse.Namespace) -> None:
     import rclpy
     from rclpy.qos import qos_profile_sensor_data
     from geometry_msgs.msg import WrenchStamped
-    from std_msgs.msg import Int16MultiArray
+    from std_msgs.msg import Bool, Float32, Int16MultiArray
 
     rclpy.init()
     node = rclpy.create_node('floor_publisher')
     wrench_pub = node.create_publisher(WrenchStamped, 'wrist_wrench', qos_profile_sensor_data)
     audio_pub = node.create_publisher(Int16MultiArray, 'audio', qos_profile_sensor_data)
+    # The node's outputs, for the ``echo_raw`` variant (a listener, as in bench_node.py).
+    heard = [0]
+    for msg_type, topic in ((Bool, 'contact'), (Float32, 'contact_probability')):
+        node.create_subscription(msg_type, topic, lambda _msg: heard.__setitem__(0, heard[0] + 1),
+                                 _output_qos())
+    threading.Thread(target=rclpy.spin, args=(node,), daemon=True).start()
     rng = np.random.default_rng(0)
     chunks = [rng.integers(-3000, 3000, CHUNK, dtype=np.int16) for _ in range(16)]
     wrench = WrenchStamped()
@@ -144,6 +162,17 @@ def subscribe(args: argparse.Namespace) -> None:
 
     def on_audio(msg) -> None:
         counts[1] += 1
+
+    if variant == 'echo_raw':
+        from std_msgs.msg import Bool, Float32
+        from contact_detector.io.cdr import BOOL_FALSE, write_float32
+        contact_pub = node.create_publisher(Bool, 'contact', _output_qos())
+        probability_pub = node.create_publisher(Float32, 'contact_probability', _output_qos())
+
+        def on_audio(msg) -> None:  # noqa: F811 (the echoing variant of the callback)
+            counts[1] += 1
+            contact_pub.publish(BOOL_FALSE)
+            probability_pub.publish(write_float32(0.25))
 
     if variant == 'idle':
         counts[:] = [1, 1]
