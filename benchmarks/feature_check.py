@@ -17,6 +17,14 @@ length.
 ``--compare audio`` (round 4): round 3's features with and without the audio onset features
 ``audio_rise_db`` / ``audio_peak_gap_db`` (and ``rise_frames``), features computed once per
 ``rise_frames``.
+``--compare changemax`` (round 5): round 4's features with and without ``force_change_max`` /
+``torque_change_max`` (and ``change_max_frames``), features computed once per
+``change_max_frames``; round 4's rule with the slow path at 0.5 (its default), 0.4 and 0.3.
+``--compare conditions`` (round 5): held-out *conditions* over several seeds (the one-forest
+ablation of ``sweep --ablation`` cannot tell one or two trials apart). For each of heavy, soft,
+noisy and gain, train on the other condition sets of the training folder and the *first*
+held-out folder, and test on that condition's trials of the *other* held-out folders; round 4's
+features against the shipped ones, slow path at 0.5 and 0.3.
 
     python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
@@ -42,6 +50,8 @@ CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
 #: The eight extras of rounds 2 and 3 (round 4 added the two audio onset features).
 EIGHT = BEFORE + ('ft_delta_angle',) + CHANGE
 ONSET = ('audio_rise_db', 'audio_peak_gap_db')
+#: Round 5's F/T features: the recent maximum of the two changes.
+CHANGE_MAX = ('force_change_max', 'torque_change_max')
 #: The shipped rule since round 2, written out: the tables in docs/sweep.md do not move with
 #: DEFAULT_RULE.
 ROUND2_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
@@ -110,6 +120,21 @@ def audio_settings(rise_frames: int) -> List[FeatureSetting]:
             subset(f'+ both (shipped, rise_frames {rise_frames})', EIGHT + ONSET)]
 
 
+def changemax_settings(frames: int) -> List[FeatureSetting]:
+    """Round 4's features, with the two ``*_change_max`` features at one window."""
+    config = replace(DEFAULT_FEATURES, extra_features=EIGHT + ONSET + CHANGE_MAX,
+                     change_max_frames=frames)
+
+    def subset(name: str, extras: tuple) -> FeatureSetting:
+        return FeatureSetting(name, config, DEFAULT_LABELS, columns=PAPER_FEATURES + extras)
+    if frames != DEFAULT_FEATURES.change_max_frames:
+        return [subset(f'+ *_change_max, change_max_frames {frames}',
+                       EIGHT + ONSET + CHANGE_MAX)]
+    return [subset('round 4 (ten extras)', EIGHT + ONSET),
+            subset(f'+ *_change_max (shipped, change_max_frames {frames})',
+                   EIGHT + ONSET + CHANGE_MAX)]
+
+
 def _frames(folders: List[str], config: FeatureConfig, jobs: int) -> list:
     spec = StreamSpec()
     frames = {}
@@ -152,7 +177,9 @@ def main() -> int:
     parser.add_argument('heldout', nargs='+', help='held-out folders')
     parser.add_argument('--seeds', default='0,1,2,3', help='forest seeds, comma-separated')
     parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--compare', choices=('features', 'deltas', 'sustain', 'audio'),
+    parser.add_argument('--compare',
+                        choices=('features', 'deltas', 'sustain', 'audio', 'changemax',
+                                 'conditions'),
                         default='features')
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(',')]
@@ -181,6 +208,29 @@ def main() -> int:
             heldout = _frames(args.heldout, config, args.jobs)
             for setting in settings:
                 _rows(setting, train, heldout, [ROUND2_RULE, FAST_RULE], seeds, args.jobs)
+        return 0
+    if args.compare == 'conditions':
+        rules = [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.3)]
+        pool = _frames([args.train, args.heldout[0]], DEFAULT_FEATURES, args.jobs)
+        test = _frames(args.heldout[1:], DEFAULT_FEATURES, args.jobs)
+        for condition in ('heavy', 'soft', 'noisy', 'gain'):
+            fit = [f for f in pool if f.truth.condition != condition]
+            left_out = [f for f in test if f.truth.condition == condition]
+            for name, extras in (('round 4', EIGHT + ONSET),
+                                 ('shipped (round 5)', EIGHT + ONSET + CHANGE_MAX)):
+                setting = FeatureSetting(f'{name}, {condition} left out', DEFAULT_FEATURES,
+                                         DEFAULT_LABELS, columns=PAPER_FEATURES + extras)
+                _rows(setting, fit, left_out, rules, seeds, args.jobs)
+        return 0
+    if args.compare == 'changemax':
+        rules = [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.4, 0.3)]
+        for frames in (DEFAULT_FEATURES.change_max_frames, 30, 80):
+            settings = changemax_settings(frames)
+            config = settings[0].config
+            train = _frames([args.train], config, args.jobs)
+            heldout = _frames(args.heldout, config, args.jobs)
+            for setting in settings:
+                _rows(setting, train, heldout, rules, seeds, args.jobs)
         return 0
     for name, config in delta_configs():
         setting = FeatureSetting(name, config, DEFAULT_LABELS)

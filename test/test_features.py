@@ -119,6 +119,34 @@ def test_change_against_the_median_baseline_does_not_echo_a_knock():
     np.testing.assert_allclose(x[late, -1], -2.0)
 
 
+def test_change_max_remembers_the_push_of_a_knock_and_not_a_touch():
+    # a knock pushes the load up by 8 N for 20 ms and rings back 3 N below it; a touch unloads
+    # by 3 N with no push first. force_change alone is -3 N in both; its recent maximum is not.
+    config = FeatureConfig(extra_features=('force_change', 'force_change_max'), delta_window=1,
+                           change_max_frames=15)
+    n = 120
+    force = np.zeros((n, 3))
+    force[:, 2] = -10.0
+    knock = force.copy()
+    knock[40:42, 2] -= 8.0
+    knock[46:50, 2] += 3.0
+    touch = force.copy()
+    touch[46:, 2] += 3.0
+    seen = {}
+    for name, f in (('knock', knock), ('touch', touch)):
+        stream = ForceTorqueStream(config=config, input_rate=100.0)
+        t, x = stream.push(t=T0 + np.arange(n) / 100, force=f, torque=np.zeros((n, 3)))
+        seen[name] = dict(zip(np.round((t - T0) * 100).astype(int), x[:, -2:].tolist()))
+    # 0.48 s: both unload by 3 N against the baseline; only the knock pushed up 6-8 frames ago
+    assert seen['knock'][48][0] == pytest.approx(-3.0) == seen['touch'][48][0]
+    assert seen['knock'][48][1] == pytest.approx(8.0)
+    assert seen['touch'][48][1] == pytest.approx(0.0)
+    # 15 frames after the push ends, it is forgotten
+    assert seen['knock'][42 + 15][1] < 1.0
+    # silence (a constant load) gives zeros
+    assert seen['touch'][35] == [0.0, 0.0]
+
+
 # --- streaming extractor ------------------------------------------------------------------
 
 def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
@@ -174,9 +202,11 @@ configs = st.builds(
         ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta',
          'ft_delta_angle'), ('torque_change', 'ft_change_angle', 'force_delta'),
         ('audio_rise_db',), ('audio_peak_gap_db', 'audio_rise_db', 'force_change'),
+        ('torque_change_max',), ('force_change_max', 'force_delta', 'torque_change'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
+    change_max_frames=st.sampled_from([1, 2, 15, 40]),
 )
 
 
@@ -426,14 +456,15 @@ def test_config_validation_names_the_field():
 
 
 def test_a_config_saved_before_baseline_window_existed_loads_with_the_same_features():
-    # the first-round model files carry no baseline_window (and no rise_frames): they must
-    # load, and compute the same features as before (the fields only affect the *_change and
-    # audio_rise_db features)
+    # the first-round model files carry no baseline_window (nor rise_frames, change_max_frames):
+    # they must load, and compute the same features as before (the fields only affect the
+    # *_change, audio_rise_db and *_change_max features)
     old = FeatureConfig(ft_window=64, ft_detrend='mean',
                         extra_features=('force_delta', 'torque_delta')).to_dict()
-    del old['baseline_window'], old['rise_frames']
+    del old['baseline_window'], old['rise_frames'], old['change_max_frames']
     config = FeatureConfig.from_dict(old)
     assert config.baseline_window == 15 and config.rise_frames == 2
+    assert config.change_max_frames == 15
     assert config.feature_names[-2:] == ('force_delta', 'torque_delta')
     assert ForceTorqueStream(config=config, input_rate=100.0).history == 64
 

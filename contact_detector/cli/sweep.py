@@ -32,6 +32,7 @@ EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delt
 #: The audio features measured against the tracked noise floor, and the two of round 4.
 ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
 RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
+CHANGE_MAX = ('force_change_max', 'torque_change_max')
 ONSET = LabelWindow(0.0, 0.1)
 STATE = LabelWindow(0.0, 0.3)
 
@@ -85,7 +86,9 @@ def ablation_settings() -> List[FeatureSetting]:
                        columns=tuple(n for n in full.feature_names if n != 'ft_delta_angle')),
         FeatureSetting('shipped, without raw audio power', full, STATE,
                        columns=tuple(n for n in full.feature_names if n != 'audio_power')),
-        FeatureSetting('shipped, without the audio onset features (round 3)', full, STATE,
+        FeatureSetting('shipped, without the *_change_max features (round 4)', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in CHANGE_MAX)),
+        FeatureSetting('shipped, without the audio onset features', full, STATE,
                        columns=tuple(n for n in full.feature_names if n not in ONSET_AUDIO)),
         FeatureSetting('shipped, without the dB-above-floor features', full, STATE,
                        columns=tuple(n for n in full.feature_names

@@ -33,20 +33,22 @@ from contact_detector.model.training import (LabelWindow, read_labels_csv, run_s
                                              trial_features)
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
-#: sample with its mean removed, the ten extra features, labels covering the first 0.3 s of
+#: sample with its mean removed, the twelve extra features, labels covering the first 0.3 s of
 #: the contact; release at the first frame where every tree says contact (p >= 0.95 with 10
-#: trees), or when the mean P(contact) of the last 15 frames reaches 0.5 (quiet contacts). The
+#: trees), or when the mean P(contact) of the last 15 frames reaches 0.3 (quiet contacts). The
 #: paper's settings (W160/H128, 7 features, 0.1 s labels) are one row of that table.
 DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
                                  delta_window=1, delta_lag=5, rise_frames=2,
+                                 change_max_frames=50,
                                  extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
                                                  'force_delta', 'torque_delta',
                                                  'ft_delta_angle', 'force_change',
                                                  'torque_change', 'ft_change_angle',
-                                                 'audio_rise_db', 'audio_peak_gap_db'))
+                                                 'audio_rise_db', 'audio_peak_gap_db',
+                                                 'force_change_max', 'torque_change_max'))
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
 DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
-                            sustain_frames=15, sustain_threshold=0.5)
+                            sustain_frames=15, sustain_threshold=0.3)
 
 
 def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
@@ -63,7 +65,10 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         ('delta_lag', 'F/T change features: samples back to the reference'),
                         ('baseline_window',
                          'samples in the median baseline of the *_change features'),
-                        ('rise_frames', 'audio frames back to the reference of audio_rise_db')):
+                        ('rise_frames', 'audio frames back to the reference of audio_rise_db'),
+                        ('change_max_frames',
+                         'F/T feature frames over which the *_change_max features take the '
+                         'maximum')):
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
@@ -115,7 +120,7 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,
-                         extra_features=extra)
+                         change_max_frames=args.change_max_frames, extra_features=extra)
 
 
 def conditions_of(bags: Sequence[Path]) -> dict:

@@ -107,7 +107,7 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
-    rows, times = [], []
+    rows, times, changes = [], [], []
     previous = [None, None]
     for end in range(need - 1, n_blocks, config.ft_hop):
         row = []
@@ -134,6 +134,10 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                        'ft_delta_angle': math.atan2(delta[1], delta[0]),
                        'force_change': change[0], 'torque_change': change[1],
                        'ft_change_angle': math.atan2(change[1], change[0])}
+            changes.append(change)
+            recent = changes[-config.change_max_frames:]
+            derived['force_change_max'] = max(c[0] for c in recent)
+            derived['torque_change_max'] = max(c[1] for c in recent)
         rows.append(row + [derived[name] for name in deltas])
         times.append(dec_t[end])
     x = np.array(rows) if rows else np.zeros((0, len(columns)))

@@ -40,7 +40,11 @@ PAPER_FEATURES = (
 #: earlier (dB; > 0 while a sound starts, < 0 while it decays) and ``audio_peak_gap_db`` is
 #: ``audio_peak_rel_db - audio_power_rel_db`` (dB below the recent peak): together they tell a
 #: sound that starts with the F/T change (the touch) from the tail of an earlier one (a knock
-#: shortly before an F/T change that only looks like unloading).
+#: shortly before an F/T change that only looks like unloading). ``force_change_max`` and
+#: ``torque_change_max`` are the largest ``force_change`` / ``torque_change`` (N, N m) over the
+#: newest ``change_max_frames`` F/T feature frames (fewer right after a start or gap): a knock
+#: on the hand first pushes the load up, and the rebound that follows looks like unloading; a
+#: touch unloads without that push before it.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -52,6 +56,8 @@ EXTRA_FEATURES = (
     'force_change',
     'torque_change',
     'ft_change_angle',
+    'force_change_max',
+    'torque_change_max',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -60,7 +66,11 @@ AUDIO_FEATURES = ('audio_power', 'audio_power_rel_db', 'audio_peak_rel_db', 'aud
 
 #: Extra features computed from changes of |F| and |T| (they need ``delta_lag`` of history).
 DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change',
-                  'torque_change', 'ft_change_angle')
+                  'torque_change', 'ft_change_angle', 'force_change_max', 'torque_change_max')
+
+#: The features that need the ``*_change`` values (against the baseline median).
+CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
+                   'torque_change_max')
 
 WINDOW_FUNCTIONS = ('rect', 'hann')
 DETREND_MODES = ('none', 'mean')
@@ -105,6 +115,9 @@ class FeatureConfig:
         Audio frames over which ``audio_peak_rel_db`` takes its maximum.
     rise_frames : int
         Distance in audio frames between the two values of ``audio_rise_db``.
+    change_max_frames : int
+        F/T feature frames (``ft_hop`` samples apart) over which ``force_change_max`` and
+        ``torque_change_max`` take their maximum.
 
     """
 
@@ -122,6 +135,7 @@ class FeatureConfig:
     noise_floor_tau_s: float = 2.0
     peak_frames: int = 10
     rise_frames: int = 2
+    change_max_frames: int = 15
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -134,7 +148,7 @@ class FeatureConfig:
                                   f'got {value!r}')
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
                           ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1),
-                          ('rise_frames', 1)):
+                          ('rise_frames', 1), ('change_max_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')

@@ -17,6 +17,7 @@ stamps, bag log times); nothing here reads a clock. The batch reference in
 """
 
 from bisect import bisect_left
+from collections import deque
 from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
@@ -25,8 +26,8 @@ import numpy as np
 
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
-from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              PAPER_FEATURES)
+from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
+                                              FeatureConfig, PAPER_FEATURES)
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
@@ -467,7 +468,10 @@ class ForceTorqueStream:
                       if config.ft_window_fn == 'hann' else None)
         wanted = set(self.use_delta)
         self._want_delta = bool(wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'})
-        self._want_change = bool(wanted & {'force_change', 'torque_change', 'ft_change_angle'})
+        self._want_change = bool(wanted & set(CHANGE_FEATURES))
+        self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
+        # (force_change, torque_change) of the frames before the newest, for *_change_max.
+        self._recent_changes: deque = deque(maxlen=config.change_max_frames - 1)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
@@ -490,6 +494,7 @@ class ForceTorqueStream:
         self._mag_start = 0                 # decimated index of the oldest sample kept
         self._n_dec = 0                     # decimated samples since the restart
         self._prev_en: Optional[np.ndarray] = None   # (2, n_bins) previous EN spectra
+        self._recent_changes.clear()
 
     def check_stamps(self, t: np.ndarray) -> None:
         """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
@@ -644,8 +649,15 @@ class ForceTorqueStream:
             derived['force_delta'] = recent_f - _mean_of(f, lagged - w, lagged)
             derived['torque_delta'] = recent_t - _mean_of(t, lagged - w, lagged)
         if self._want_change:
-            derived['force_change'] = recent_f - _median_of(f[lagged - wb:lagged])
-            derived['torque_change'] = recent_t - _median_of(t[lagged - wb:lagged])
+            fc = derived['force_change'] = recent_f - _median_of(f[lagged - wb:lagged])
+            tc = derived['torque_change'] = recent_t - _median_of(t[lagged - wb:lagged])
+            if self._want_change_max:
+                fmax, tmax = fc, tc
+                for old_f, old_t in self._recent_changes:
+                    fmax = old_f if old_f > fmax else fmax
+                    tmax = old_t if old_t > tmax else tmax
+                derived['force_change_max'], derived['torque_change_max'] = fmax, tmax
+                self._recent_changes.append((fc, tc))
         if self._angles:
             # np.arctan2 (math.atan2 rounds differently), every angle in one call
             values = np.arctan2([derived[dt] for _, _, dt in self._angles],
@@ -653,6 +665,14 @@ class ForceTorqueStream:
             for (name, _, _), value in zip(self._angles, values):
                 derived[name] = value
         return [derived[name] for name in self.use_delta]
+
+    def _change_max(self, change: np.ndarray) -> np.ndarray:
+        # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.
+        before = np.array(self._recent_changes, dtype=float).reshape(-1, 2)
+        peak = running_max(values=change, before=before,
+                           window=self.config.change_max_frames)
+        self._recent_changes.extend(map(tuple, change.tolist()))
+        return peak
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.decimation
@@ -724,14 +744,45 @@ class ForceTorqueStream:
                                               window=cfg.delta_window)
                 derived.update(_with_angle(('force_delta', 'torque_delta', 'ft_delta_angle'),
                                            change))
-            if wanted & {'force_change', 'torque_change', 'ft_change_angle'}:
+            if wanted & set(CHANGE_FEATURES):
                 change = recent - window_median(signal=mags, ends=lagged,
                                                 window=cfg.baseline_window)
                 derived.update(_with_angle(('force_change', 'torque_change', 'ft_change_angle'),
                                            change))
+                if self._want_change_max:
+                    peak = self._change_max(change)
+                    derived['force_change_max'], derived['torque_change_max'] = peak.T
         for col, name in enumerate(self.use_delta, start=6):
             out[:, col] = derived[name]
         return out
+
+
+def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.ndarray:
+    """
+    Maximum of each row's column over the newest ``window`` rows, earlier rows included.
+
+    With ``rows = [before; values]`` and ``j = len(before)``:
+    ``out[i] = max(rows[max(0, j + i - window + 1) : j + i + 1])`` per column, ``i < m``.
+
+    Parameters
+    ----------
+    values : np.ndarray, shape (m, k)
+        New rows.
+    before : np.ndarray, shape (j, k)
+        The rows just before them (``j < window``; fewer right after a start).
+    window : int
+        Rows per maximum, >= 1.
+
+    Returns
+    -------
+    np.ndarray, shape (m, k)
+
+    """
+    m, k = values.shape
+    padded = np.concatenate([np.full((window - 1 - before.shape[0], k), -np.inf),
+                             before, values])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
+    return windows.max(axis=-1)[-m:]
 
 
 def _mean_of(values: list, lo: int, hi: int) -> float:
