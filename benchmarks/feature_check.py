@@ -169,6 +169,17 @@ def _rows(setting: FeatureSetting, train: list, heldout: list, rules: List[Decis
               f"{t['premature']} | {t['impact']} | {latency} |", flush=True)
 
 
+def _groups(groups: List[List[FeatureSetting]], rules: List[DecisionRule],
+            args: argparse.Namespace, seeds: List[int]) -> None:
+    # Each group shares one feature configuration: its features are computed once.
+    for settings in groups:
+        config = settings[0].config
+        train = _frames([args.train], config, args.jobs)
+        heldout = _frames(args.heldout, config, args.jobs)
+        for setting in settings:
+            _rows(setting, train, heldout, rules, seeds, args.jobs)
+
+
 def main() -> int:
     """Run the comparison; print one markdown table."""
     parser = argparse.ArgumentParser(description=__doc__,
@@ -201,13 +212,8 @@ def main() -> int:
               args.jobs)
         return 0
     if args.compare == 'audio':
-        for rise_frames in (DEFAULT_FEATURES.rise_frames, 1, 3):
-            settings = audio_settings(rise_frames)
-            config = settings[0].config
-            train = _frames([args.train], config, args.jobs)
-            heldout = _frames(args.heldout, config, args.jobs)
-            for setting in settings:
-                _rows(setting, train, heldout, [ROUND2_RULE, FAST_RULE], seeds, args.jobs)
+        _groups([audio_settings(r) for r in (DEFAULT_FEATURES.rise_frames, 1, 3)],
+                [ROUND2_RULE, FAST_RULE], args, seeds)
         return 0
     if args.compare == 'conditions':
         rules = [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.3)]
@@ -223,14 +229,9 @@ def main() -> int:
                 _rows(setting, fit, left_out, rules, seeds, args.jobs)
         return 0
     if args.compare == 'changemax':
-        rules = [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.4, 0.3)]
-        for frames in (DEFAULT_FEATURES.change_max_frames, 30, 80):
-            settings = changemax_settings(frames)
-            config = settings[0].config
-            train = _frames([args.train], config, args.jobs)
-            heldout = _frames(args.heldout, config, args.jobs)
-            for setting in settings:
-                _rows(setting, train, heldout, rules, seeds, args.jobs)
+        _groups([changemax_settings(k) for k in (DEFAULT_FEATURES.change_max_frames, 30, 80)],
+                [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.4, 0.3)],
+                args, seeds)
         return 0
     for name, config in delta_configs():
         setting = FeatureSetting(name, config, DEFAULT_LABELS)

@@ -32,6 +32,7 @@ EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delt
 #: The audio features measured against the tracked noise floor, and the two of round 4.
 ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
 RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
+#: The two F/T features of round 5.
 CHANGE_MAX = ('force_change_max', 'torque_change_max')
 ONSET = LabelWindow(0.0, 0.1)
 STATE = LabelWindow(0.0, 0.3)

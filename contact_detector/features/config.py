@@ -42,9 +42,9 @@ PAPER_FEATURES = (
 #: sound that starts with the F/T change (the touch) from the tail of an earlier one (a knock
 #: shortly before an F/T change that only looks like unloading). ``force_change_max`` and
 #: ``torque_change_max`` are the largest ``force_change`` / ``torque_change`` (N, N m) over the
-#: newest ``change_max_frames`` F/T feature frames (fewer right after a start or gap): a knock
-#: on the hand first pushes the load up, and the rebound that follows looks like unloading; a
-#: touch unloads without that push before it.
+#: newest ``change_max_frames`` F/T feature frames (fewer right after a start or gap): in the
+#: early releases we looked at, a knock on the hand first pushed the load up and the rebound
+#: that followed looked like unloading; a touch unloads without that push before it.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
