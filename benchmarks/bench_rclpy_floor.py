@@ -72,8 +72,22 @@ VARIANTS = {
 def _output_qos():
     """Return the node's output QoS (reliable, depth ``node.OUTPUT_DEPTH``)."""
     from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+    from contact_detector.ros.node import OUTPUT_DEPTH
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                       reliability=ReliabilityPolicy.RELIABLE)
+
+
+def _echo_outputs(node):
+    """Return a callable that publishes the node's two per-frame outputs, as CDR bytes."""
+    from std_msgs.msg import Bool, Float32
+    from contact_detector.io.cdr import BOOL_FALSE, write_float32
+    contact_pub = node.create_publisher(Bool, 'contact', _output_qos())
+    probability_pub = node.create_publisher(Float32, 'contact_probability', _output_qos())
+
+    def echo() -> None:
+        contact_pub.publish(BOOL_FALSE)
+        probability_pub.publish(write_float32(0.25))
+    return echo
 
 
 def _cpu_busy() -> tuple:
@@ -160,19 +174,12 @@ def subscribe(args: argparse.Namespace) -> None:
     def on_wrench(msg) -> None:
         counts[0] += 1
 
+    echo = _echo_outputs(node) if variant == 'echo_raw' else None
+
     def on_audio(msg) -> None:
         counts[1] += 1
-
-    if variant == 'echo_raw':
-        from std_msgs.msg import Bool, Float32
-        from contact_detector.io.cdr import BOOL_FALSE, write_float32
-        contact_pub = node.create_publisher(Bool, 'contact', _output_qos())
-        probability_pub = node.create_publisher(Float32, 'contact_probability', _output_qos())
-
-        def on_audio(msg) -> None:  # noqa: F811 (the echoing variant of the callback)
-            counts[1] += 1
-            contact_pub.publish(BOOL_FALSE)
-            probability_pub.publish(write_float32(0.25))
+        if echo is not None:
+            echo()
 
     if variant == 'idle':
         counts[:] = [1, 1]

@@ -779,6 +779,8 @@ def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.nd
 
     """
     m, k = values.shape
+    if m == 0:
+        return np.zeros((0, k))
     padded = np.concatenate([np.full((window - 1 - before.shape[0], k), -np.inf),
                              before, values])
     windows = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
@@ -1058,9 +1060,10 @@ class StreamingFeatureExtractor:
     def _recent_peak(self, rel: np.ndarray) -> np.ndarray:
         # Running maximum over the newest peak_frames values, across chunk boundaries.
         k = self.config.peak_frames
+        before = np.array(self._rel_hist).reshape(-1, 1)
         history = np.concatenate([self._rel_hist, rel])
         self._rel_hist = history[history.size - (k - 1):].tolist() if k > 1 else []
-        return history[np.arange(rel.size)[:, None] + np.arange(k)].max(axis=1)
+        return running_max(values=rel[:, None], before=before, window=k)[:, 0]
 
     def push_wrench(self, *, t: np.ndarray, force: np.ndarray,
                     torque: np.ndarray) -> FeatureFrames:
