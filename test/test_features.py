@@ -147,6 +147,70 @@ def test_change_max_remembers_the_push_of_a_knock_and_not_a_touch():
     assert seen['touch'][35] == [0.0, 0.0]
 
 
+def _random_rotation(seed):
+    q = np.random.default_rng(seed).normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+SHIFT_CONFIG = FeatureConfig(extra_features=('force_shift', 'torque_shift', 'force_shift_min',
+                                             'torque_shift_min', 'force_shift_max',
+                                             'torque_shift_max'),
+                             delta_window=1, shift_min_frames=10, change_max_frames=50)
+
+
+def _shift_features(force, torque):
+    stream = ForceTorqueStream(config=SHIFT_CONFIG, input_rate=100.0)
+    t, x = stream.push(t=T0 + np.arange(force.shape[0]) / 100, force=force, torque=torque)
+    return np.round((t - T0) * 100).astype(int), x[:, -6:]
+
+
+def test_shift_features_do_not_depend_on_sensor_orientation_or_tare():
+    # the same load transfer (the table takes 4 N of a 6 N weight at 0.15 m) seen by a sensor
+    # held at a random orientation, with or without a bias, gives the same shift features;
+    # the signed |F| change does not (it even flips sign on a tared sensor)
+    n = 120
+    force = np.zeros((n, 3))
+    force[:, 0] = -6.0
+    force[60:, 0] += np.minimum(np.arange(n - 60) / 5, 1.0) * 4.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    _, ref = _shift_features(force, torque)
+    for seed in range(5):
+        rot = _random_rotation(seed)
+        bias_f, bias_t = np.array([3.0, -2.0, 40.0]) * seed, np.array([0.2, 0.1, -0.3]) * seed
+        _, got = _shift_features(force @ rot.T + bias_f, torque @ rot.T + bias_t)
+        np.testing.assert_allclose(got, ref, atol=1e-9)
+    t, x = _shift_features(force, torque)
+    frame = dict(zip(t.tolist(), x.tolist()))
+    assert frame[59] == [0.0] * 6                       # a constant load gives zeros
+    assert frame[70][0] == pytest.approx(4.0)           # the whole transfer, in N
+    assert frame[70][1] == pytest.approx(0.6)           # and 0.15 m x 4 N of torque
+
+
+def test_shift_min_tells_a_lasting_load_change_from_a_knock():
+    # a 20 ms knock of 8 N that rings back, against a touch that moves 3 N for good: the
+    # newest shift is large in both, its minimum over the last 10 frames only for the touch
+    n = 160
+    force = np.zeros((n, 3))
+    force[:, 2] = -10.0
+    knock = force.copy()
+    knock[80:82, 2] -= 8.0
+    knock[83:87, 2] += 3.0 * np.array([1, -1, 1, -1])
+    touch = force.copy()
+    touch[80:, 2] += 3.0
+    zero = np.zeros((n, 3))
+    tk, xk = _shift_features(knock, zero)
+    tt, xt = _shift_features(touch, zero)
+    at = {int(a): row for a, row in zip(tk, xk)}
+    bt = {int(a): row for a, row in zip(tt, xt)}
+    assert at[81][0] == pytest.approx(8.0) and bt[81][0] == pytest.approx(3.0)
+    assert at[90][2] == pytest.approx(0.0)               # the knock: nothing lasted
+    assert bt[90][2] == pytest.approx(3.0)               # the touch: 3 N for 10 frames
+    assert at[90][4] == pytest.approx(8.0)               # the maximum remembers the knock
+
+
 # --- streaming extractor ------------------------------------------------------------------
 
 def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
@@ -203,10 +267,14 @@ configs = st.builds(
          'ft_delta_angle'), ('torque_change', 'ft_change_angle', 'force_delta'),
         ('audio_rise_db',), ('audio_peak_gap_db', 'audio_rise_db', 'force_change'),
         ('torque_change_max',), ('force_change_max', 'force_delta', 'torque_change'),
+        ('force_shift', 'torque_shift_min'), ('torque_shift', 'force_shift_max', 'force_delta'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
     change_max_frames=st.sampled_from([1, 2, 15, 40]),
+    shift_min_frames=st.sampled_from([1, 3, 10]),
+    shift_lag=st.sampled_from([1, 5, 20]),
+    shift_window=st.sampled_from([1, 4, 40]),
 )
 
 
@@ -467,12 +535,3 @@ def test_a_config_saved_before_baseline_window_existed_loads_with_the_same_featu
     assert config.change_max_frames == 15
     assert config.feature_names[-2:] == ('force_delta', 'torque_delta')
     assert ForceTorqueStream(config=config, input_rate=100.0).history == 64
-
-
-@pytest.mark.parametrize('n', [16, 63, 64, 65, 160])
-def test_fast_rfft_has_the_bits_of_numpy_rfft(n):
-    # The live path may call numpy's pocketfft gufunc directly (a private module, checked at
-    # import); whichever it uses, the spectra must be np.fft.rfft's to the bit.
-    from contact_detector.features.streaming import _rfft
-    frames = np.random.default_rng(n).normal(size=(2, n))
-    assert np.array_equal(_rfft(np.ascontiguousarray(frames)), np.fft.rfft(frames, axis=1))

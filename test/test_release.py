@@ -104,3 +104,32 @@ def test_rule_labels_name_every_path():
     assert DecisionRule(threshold=0.85, sustain_frames=10,
                         sustain_threshold=0.4).short() == 'p>=0.85 x1 or mean10>=0.4'
     assert DecisionRule(threshold=0.7, average_frames=3).short() == 'mean3 p>=0.7 x1'
+
+
+def test_evidence_path_accumulates_a_few_fairly_sure_frames():
+    # a forest 0.8-sure for two frames never reaches a 0.95 threshold; the evidence path sums
+    # p - drift over consecutive frames: 0.3 + 0.3 reaches 0.6 at the second frame
+    rule = DecisionRule(threshold=0.95, evidence_threshold=0.6, evidence_drift=0.5)
+    p = [0.1, 0.8, 0.8, 0.1, 0.1]
+    contact, releases, _ = _run(rule, p)
+    assert contact.tolist() == [False, False, True, False, False]
+    assert releases == [pytest.approx(2 * HOP)]
+    # one frame short of it, or frames below the drift in between, do not release
+    assert _run(rule, [0.1, 0.8, 0.1, 0.8, 0.1])[1] == []
+    assert _run(replace_rule(rule, evidence_threshold=0.7), p)[1] == []
+    # an invalid frame empties the evidence, whatever came before
+    assert _run(rule, [0.8, 0.8], valid=[True, False])[1] == []
+    assert _run(rule, [0.8, 0.8, 0.8], valid=[True, False, True])[1] == []
+    # the same in frame-by-frame pieces
+    assert _run(rule, p, pieces=[1, 2, 3, 4])[1] == [pytest.approx(2 * HOP)]
+    # off by default, and a node parameter can set it
+    assert DecisionRule().evidence_threshold == 0.0
+    assert rule_overrides({'release.evidence_threshold': 1.5}) == {'evidence_threshold': 1.5}
+    with pytest.raises(ConfigError, match='evidence_drift'):
+        DecisionRule(evidence_drift=1.5)
+
+
+def replace_rule(rule, **changes):
+    """dataclasses.replace for a frozen DecisionRule."""
+    from dataclasses import replace
+    return replace(rule, **changes)

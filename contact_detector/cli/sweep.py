@@ -1,6 +1,12 @@
 """``contact-detector sweep``: choose features, label window and decision rule by measurement.
 
     contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
+    contact-detector sweep DIR... --lofo [--lofo-settings shipped,invariant] [--out FILE.md]
+
+With ``--lofo`` every trial of every folder is pooled and grouped by family (its condition set
+in the manifest); for each family a forest is trained on all the others and every candidate
+rule is scored on the family left out. The table gives one row per family and, per feature
+setting and rule, the *worst* family: the figure to choose by.
 
 Trains the paper's forest (10 trees, max_features = sqrt) per feature setting and label window
 on the training trials, then scores every decision rule on the held-out trials: detections,
@@ -25,7 +31,8 @@ from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetting,
-                                          fit_forest, rows_markdown, score_rules)
+                                          fit_forest, leave_one_family_out, rows_markdown,
+                                          score_rules, worst_family)
 from contact_detector.model.training import LabelWindow
 
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
@@ -132,8 +139,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the command; return the exit status."""
     parser = argparse.ArgumentParser(prog='contact-detector sweep', description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('train', help='training bags (folder)')
-    parser.add_argument('heldout', help='held-out bags (folder)')
+    parser.add_argument('bags', nargs='+',
+                        help='TRAIN_DIR HELDOUT_DIR, or with --lofo any number of folders')
+    parser.add_argument('--lofo', action='store_true',
+                        help='leave-one-family-out: pool the folders, leave each family out')
+    parser.add_argument('--lofo-settings', default=','.join(LOFO_SETTINGS),
+                        help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)})')
+    parser.add_argument('--trees', type=int, default=10, help='trees per forest')
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
@@ -149,8 +161,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
     spec = StreamSpec()
-    train = decode(find_bags([args.train]), spec, 'train')
-    heldout = decode(find_bags([args.heldout]), spec, 'heldout')
+    if args.lofo:
+        output = lofo(args, spec)
+        print(output)
+        if args.out:
+            args.out.write_text(output)
+        return 0
+    if len(args.bags) != 2:
+        parser.error('give TRAIN_DIR and HELDOUT_DIR (or --lofo with any folders)')
+    train = decode(find_bags([args.bags[0]]), spec, 'train')
+    heldout = decode(find_bags([args.bags[1]]), spec, 'heldout')
     rules = rule_grid()
     rows, best_rows = [], []
     cache = {}
@@ -184,6 +204,78 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.json:
         args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=2, default=str))
     return 0
+
+
+_SPECTRAL = ('force_centroid', 'force_spread', 'force_flux', 'torque_centroid', 'torque_spread',
+             'torque_flux')
+_SHIFT = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
+          'force_shift_max', 'torque_shift_max')
+_SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_max')
+#: The feature settings --lofo compares: name -> columns (None: the shipped model's).
+LOFO_SETTINGS = {
+    'shipped': None,
+    'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
+    'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
+    'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
+    'ft-only': _SPECTRAL + _SHIFT,
+}
+
+
+def lofo_rules() -> List[DecisionRule]:
+    """The rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    rules = [DEFAULT_RULE]
+    rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
+    rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
+              for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
+    return rules
+
+
+def lofo(args, spec) -> str:
+    """Leave-one-family-out over the pooled folders; per setting and rule the worst family."""
+    from contact_detector.features.config import EXTRA_FEATURES
+    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
+    trials = {}
+    for i, folder in enumerate(args.bags):
+        trials.update(decode(find_bags([folder]), spec, f'{i}'))
+    frames = list(compute_frames(events_by_trial=trials, config=config,
+                                 audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
+                                 jobs=args.jobs).values())
+    rules = lofo_rules()
+    worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
+                   'p95 [ms] | all families: detected / premature |',
+                   '|---|---|---|---|---|---|---|---|']
+    family_lines = ['| setting | rule | family | detected | premature | impact events | '
+                    'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
+    for name in tqdm(args.lofo_settings.split(','), desc='lofo', unit='setting'):
+        columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
+        setting = FeatureSetting(name, config, STATE, columns=tuple(columns))
+        folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
+                                     n_estimators=args.trees, seed=args.seed, jobs=args.jobs)
+        for k, rule in enumerate(rules):
+            summaries = []
+            for fold in folds:
+                s = dict(fold.rows[k].summary, family=fold.family)
+                summaries.append(s)
+                family_lines.append(f'| {name} | {rule.short()} | {fold.family} | '
+                                    f"{s['detected']}/{s['trials']} | {s['premature']} | "
+                                    f"{s['impact_events']} | {_ms(s['latency_ms_median'])} | "
+                                    f"{_ms(s['latency_ms_p95'])} |")
+            w = worst_family(summaries)
+            if w is None:
+                continue
+            total = sum(s['detected'] for s in summaries)
+            trials_n = sum(s['trials'] for s in summaries)
+            early = sum(s['premature'] for s in summaries)
+            worst_lines.append(f"| {name} | {rule.short()} | {w['family']} | "
+                               f"{w['detected']}/{w['trials']} | {w['premature']} | "
+                               f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
+                               f'{total}/{trials_n} / {early} |')
+    return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
+                      *worst_lines, '', '## Every family', '', *family_lines, ''])
+
+
+def _ms(value) -> str:
+    return '-' if value is None else f'{value:.0f}'
 
 
 def ablation(train, heldout, args) -> str:

@@ -22,6 +22,8 @@ RULE_PARAMETERS = {
     'release.average_frames': ('average_frames', 1),
     'release.sustain_frames': ('sustain_frames', 0),
     'release.sustain_threshold': ('sustain_threshold', 0.0),
+    'release.evidence_threshold': ('evidence_threshold', 0.0),
+    'release.evidence_drift': ('evidence_drift', 0.0),
 }
 
 
@@ -66,11 +68,16 @@ class ReleaseLogic:
     - the mean P(contact) of the last ``rule.average_frames`` frames is ``>= rule.threshold``
       (with the default ``average_frames=1``: ``p >= threshold``), or
     - ``rule.sustain_frames > 0`` and the mean P(contact) of the last ``rule.sustain_frames``
-      frames is ``>= rule.sustain_threshold`` (a slower path for quiet, sustained contacts).
+      frames is ``>= rule.sustain_threshold`` (a slower path for quiet, sustained contacts),
+      or
+    - ``rule.evidence_threshold > 0`` and the evidence ``S_i = max(0, S_{i-1} + p_i -
+      rule.evidence_drift)`` accumulated over consecutive valid frames reaches
+      ``rule.evidence_threshold`` (a forest that is fairly sure for a few frames).
 
-    Both means need that many consecutive valid, unblocked frames: an invalid or blocked frame
-    empties the history. A contact *event* starts when ``rule.confirm_frames`` consecutive
-    frames are contact and at least ``rule.refractory_s`` have passed since the previous event.
+    The means and the evidence need consecutive valid, unblocked frames: an invalid or
+    blocked frame empties the history and the evidence. A contact *event* starts when
+    ``rule.confirm_frames`` consecutive frames are contact and at least ``rule.refractory_s``
+    have passed since the previous event.
     An event releases only while armed, and a release disarms: at most one release per arming.
 
     Parameters
@@ -96,6 +103,7 @@ class ReleaseLogic:
         self._run = 0
         self._last_event_t = -math.inf
         self._recent.clear()
+        self._evidence = 0.0
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
@@ -108,7 +116,11 @@ class ReleaseLogic:
         recent.append(p)
         while len(recent) > max(rule.average_frames, rule.sustain_frames):
             recent.popleft()
+        evidence = self._evidence + p - rule.evidence_drift
+        self._evidence = evidence if evidence > 0.0 else 0.0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
+            return True
+        if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
@@ -188,6 +200,7 @@ class ReleaseLogic:
         """Advance the state machine by one frame; return whether it is contact."""
         if not ok:
             self._recent.clear()
+            self._evidence = 0.0
             self._run = 0
             return False
         if not self._is_contact(p):

@@ -12,7 +12,8 @@ from typing import Optional
 import numpy as np
 
 from contact_detector.features import spectral
-from contact_detector.features.config import AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig
+from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
+                                              SHIFT_FEATURES)
 from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
 
 
@@ -106,8 +107,10 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     n = config.ft_window
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
+    if set(deltas) & set(SHIFT_FEATURES):
+        need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
-    rows, times, changes = [], [], []
+    rows, times, changes, shifts = [], [], [], []
     previous = [None, None]
     for end in range(need - 1, n_blocks, config.ft_hop):
         row = []
@@ -138,6 +141,20 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
             recent = changes[-config.change_max_frames:]
             derived['force_change_max'] = max(c[0] for c in recent)
             derived['torque_change_max'] = max(c[1] for c in recent)
+            # the vector change against the per-axis median baseline, force then torque
+            w, lag, b = config.delta_window, config.shift_lag, config.shift_window
+            new_v = dec[end - w + 1:end + 1].mean(axis=0)
+            base_v = np.median(dec[end - lag - b + 1:end - lag + 1], axis=0)
+            shift = [math.sqrt(sum((new_v[k] - base_v[k]) ** 2 for k in axes))
+                     for axes in ((0, 1, 2), (3, 4, 5))]
+            shifts.append(shift)
+            derived['force_shift'], derived['torque_shift'] = shift
+            for name, frames in (('min', config.shift_min_frames),
+                                 ('max', config.change_max_frames)):
+                recent = shifts[-frames:]
+                pick = min if name == 'min' else max
+                derived[f'force_shift_{name}'] = pick(s[0] for s in recent)
+                derived[f'torque_shift_{name}'] = pick(s[1] for s in recent)
         rows.append(row + [derived[name] for name in deltas])
         times.append(dec_t[end])
     x = np.array(rows) if rows else np.zeros((0, len(columns)))

@@ -45,6 +45,15 @@ PAPER_FEATURES = (
 #: newest ``change_max_frames`` F/T feature frames (fewer right after a start or gap): in the
 #: early releases we looked at, a knock on the hand first pushed the load up and the rebound
 #: that followed looked like unloading; a touch unloads without that push before it.
+#: ``force_shift`` and ``torque_shift`` are the length of the change of the force (torque)
+#: *vector*: ``|mean of the newest delta_window vectors - per-axis median of the
+#: shift_window vectors ending shift_lag samples earlier|`` (N, N m). A length does not
+#: depend on the sensor's orientation, on where gravity points in its frame, on its tare or on
+#: the sign convention of the robot, and it grows whether the table takes the load or the arm
+#: presses beyond it. ``*_shift_min`` is its minimum over the newest ``shift_min_frames`` F/T
+#: feature frames (a *lasting* change: a knock's pulse and the ringing after it pass through
+#: small values, a load transfer does not) and ``*_shift_max`` its maximum over the newest
+#: ``change_max_frames`` frames.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -58,6 +67,12 @@ EXTRA_FEATURES = (
     'ft_change_angle',
     'force_change_max',
     'torque_change_max',
+    'force_shift',
+    'torque_shift',
+    'force_shift_min',
+    'torque_shift_min',
+    'force_shift_max',
+    'torque_shift_max',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -66,11 +81,18 @@ AUDIO_FEATURES = ('audio_power', 'audio_power_rel_db', 'audio_peak_rel_db', 'aud
 
 #: Extra features computed from changes of |F| and |T| (they need ``delta_lag`` of history).
 DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change',
-                  'torque_change', 'ft_change_angle', 'force_change_max', 'torque_change_max')
+                  'torque_change', 'ft_change_angle', 'force_change_max', 'torque_change_max',
+                  'force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
+                  'force_shift_max', 'torque_shift_max')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
                    'torque_change_max')
+
+#: The features computed from the force and torque *vectors* (not their magnitudes): they do not
+#: depend on how the sensor is oriented, on gravity's direction in its frame or on its tare.
+SHIFT_FEATURES = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
+                  'force_shift_max', 'torque_shift_max')
 
 WINDOW_FUNCTIONS = ('rect', 'hann')
 DETREND_MODES = ('none', 'mean')
@@ -116,8 +138,16 @@ class FeatureConfig:
     rise_frames : int
         Distance in audio frames between the two values of ``audio_rise_db``.
     change_max_frames : int
-        F/T feature frames (``ft_hop`` samples apart) over which ``force_change_max`` and
-        ``torque_change_max`` take their maximum.
+        F/T feature frames (``ft_hop`` samples apart) over which ``force_change_max``,
+        ``torque_change_max`` and ``*_shift_max`` take their maximum.
+    shift_min_frames : int
+        F/T feature frames over which ``force_shift_min`` and ``torque_shift_min`` take their
+        minimum.
+    shift_lag, shift_window : int
+        The baseline of ``*_shift``: the per-axis median of ``shift_window`` F/T samples
+        ending ``shift_lag`` samples before the newest. Longer than the ``*_change`` baseline,
+        so that a load transfer of up to about ``(shift_lag + shift_window) / ft_rate_hz`` s is
+        seen whole.
 
     """
 
@@ -136,6 +166,9 @@ class FeatureConfig:
     peak_frames: int = 10
     rise_frames: int = 2
     change_max_frames: int = 15
+    shift_min_frames: int = 10
+    shift_lag: int = 20
+    shift_window: int = 40
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -148,7 +181,8 @@ class FeatureConfig:
                                   f'got {value!r}')
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
                           ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1),
-                          ('rise_frames', 1), ('change_max_frames', 1)):
+                          ('rise_frames', 1), ('change_max_frames', 1),
+                          ('shift_min_frames', 1), ('shift_lag', 1), ('shift_window', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')

@@ -27,42 +27,10 @@ import numpy as np
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
-                                              FeatureConfig, PAPER_FEATURES)
+                                              FeatureConfig, PAPER_FEATURES, SHIFT_FEATURES)
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
-
-_add_reduce = np.add.reduce
-_max_reduce = np.maximum.reduce
-
-try:
-    # The gufuncs np.fft.rfft calls (numpy >= 2.0), without its ~5 us of Python per call.
-    from numpy.fft._pocketfft_umath import rfft_n_even as _RFFT_EVEN, rfft_n_odd as _RFFT_ODD
-except ImportError:                 # another numpy: np.fft.rfft itself
-    _RFFT_EVEN = _RFFT_ODD = None
-
-
-def _rfft(frames: np.ndarray) -> np.ndarray:
-    """``np.fft.rfft(frames, axis=1)`` of a C-contiguous (m, n) float64 array: the same bits."""
-    n = frames.shape[1]
-    if _RFFT_EVEN is None:
-        return np.fft.rfft(frames, axis=1)
-    out = np.empty((frames.shape[0], n // 2 + 1), dtype=np.complex128)
-    return (_RFFT_EVEN if n % 2 == 0 else _RFFT_ODD)(frames, 1, out=out)
-
-
-def _private_rfft_matches() -> bool:
-    # A private numpy module: use it only if it still gives np.fft.rfft's bits here.
-    frames = np.sin(np.arange(2 * 65, dtype=np.float64) * 0.7).reshape(2, 65)
-    try:
-        return all(np.array_equal(_rfft(np.ascontiguousarray(f)), np.fft.rfft(f, axis=1))
-                   for f in (frames, frames[:, :64]))
-    except Exception:               # any change of its signature or behaviour
-        return False
-
-
-if _RFFT_EVEN is not None and not _private_rfft_matches():
-    _RFFT_EVEN = _RFFT_ODD = None
 
 
 class TimeJumpError(InputError):
@@ -458,25 +426,28 @@ class ForceTorqueStream:
         n = config.ft_window
         need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
                 if self.use_delta else n)
+        if set(self.use_delta) & set(SHIFT_FEATURES):
+            need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
         self.first_end = need - 1
         self.history = need
         self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
         self._offsets = np.arange(n)
-        # The single-sample path's constants (the values the block path computes per call).
-        self._nu = spectral.normalised_bin_frequencies(n_bins=n // 2 + 1, window_length=n)
-        self._hann = (0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n)
-                      if config.ft_window_fn == 'hann' else None)
         wanted = set(self.use_delta)
         self._want_delta = bool(wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'})
         self._want_change = bool(wanted & set(CHANGE_FEATURES))
         self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
         # (force_change, torque_change) of the frames before the newest, for *_change_max.
         self._recent_changes: deque = deque(maxlen=config.change_max_frames - 1)
+        self._want_shift = bool(wanted & set(SHIFT_FEATURES))
+        # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
+        self._recent_shifts: deque = deque(
+            maxlen=max(config.change_max_frames, config.shift_min_frames) - 1)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
         self._mags = TailBuffer(capacity=need + 64, width=2)    # |F|, |T| of the newest samples
         self._mag_ts = TailBuffer(capacity=need + 64)            # their times
+        self._vecs = TailBuffer(capacity=need + 64, width=6)     # F, T vectors (shift features)
         self.restarts = 0
         self.reset()
 
@@ -495,6 +466,8 @@ class ForceTorqueStream:
         self._n_dec = 0                     # decimated samples since the restart
         self._prev_en: Optional[np.ndarray] = None   # (2, n_bins) previous EN spectra
         self._recent_changes.clear()
+        self._vecs.clear()
+        self._recent_shifts.clear()
 
     def check_stamps(self, t: np.ndarray) -> None:
         """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
@@ -562,7 +535,7 @@ class ForceTorqueStream:
         """
         Add one wrench sample (a live message); return the feature frame it completes, if any.
 
-        The same numbers as :meth:`push` with one sample, in fewer array calls.
+        :meth:`push` with one sample: the same code, so the same numbers.
 
         Parameters
         ----------
@@ -577,94 +550,10 @@ class ForceTorqueStream:
             The frame's time and its features (``self.columns``), or None.
 
         """
-        last = self.last_input_t
-        if last is not None and t <= last:
-            self.check_stamps(np.array([t]))
-        if self.decimation != 1:
-            ft_t, ft_x = self.push(t=np.array([t]), force=np.array([values[:3]]),
-                                   torque=np.array([values[3:]]))
-            return (float(ft_t[0]), ft_x[0].tolist()) if ft_t.size else None
-        if last is not None and t - last > self.gap_reset_s:
-            self.restarts += 1
-            self._restart()
-        self.last_input_t = t
-        fx, fy, fz, tx, ty, tz = values
-        # np.linalg.norm's sum of three squares, in its order.
-        self._mags.append((math.sqrt(fx * fx + fy * fy + fz * fz),
-                           math.sqrt(tx * tx + ty * ty + tz * tz)))
-        self._mag_ts.append(t)
-        end = self._n_dec
-        self._n_dec += 1
-        out = None
-        if end >= self.first_end and (end - self.first_end) % self.config.ft_hop == 0:
-            out = t, self._features_one()
-        self._mag_ts.keep_last(self.history)
-        self._mag_start += self._mags.keep_last(self.history)
-        return out
-
-    def _features_one(self) -> list:
-        # _features for the newest sample: the same array operations on the same (2, n) window
-        # in fewer calls, the per-frame scalars in Python floats (the same IEEE operations).
-        cfg = self.config
-        n = cfg.ft_window
-        mags = self._mags.view
-        frames = np.ascontiguousarray(mags[mags.shape[0] - n:].T)           # (2, n)
-        if cfg.ft_detrend == 'mean':
-            mean = _add_reduce(frames, axis=1, keepdims=True)   # np.mean: the sum / n
-            mean /= n
-            frames -= mean
-        if self._hann is not None:
-            frames *= self._hann
-        xt = np.abs(_rfft(frames))
-        peak = _max_reduce(xt, axis=1, keepdims=True)
-        (pf,), (pt,) = peak.tolist()
-        xt /= peak if pf > 0.0 and pt > 0.0 else np.where(peak > 0.0, peak, 1.0)
-        den = _add_reduce(xt, axis=1, keepdims=True)
-        den += spectral.EPS
-        (df,), (dt,) = den.tolist()
-        cf, ct = np.einsum('ik,k->i', xt, self._nu).tolist()
-        cf, ct = cf / df, ct / dt
-        dev = np.subtract(self._nu, [[cf], [ct]])
-        dev *= dev
-        sf, st = np.einsum('ik,ik->i', dev, xt).tolist()
-        en = xt / den
-        diff = en - (en if self._prev_en is None else self._prev_en)
-        ff, ftq = np.einsum('ik,ik->i', diff, diff).tolist()
-        self._prev_en = en
-        row = [cf, math.sqrt(sf / df), ff, ct, math.sqrt(st / dt), ftq]
-        if self.use_delta:
-            row.extend(self._deltas_one(mags))
-        return row
-
-    def _deltas_one(self, mags: np.ndarray) -> list:
-        # The *_delta / *_change / angle columns for the newest sample (see _features).
-        cfg = self.config
-        lag, w, wb = cfg.delta_lag, cfg.delta_window, cfg.baseline_window
-        span = lag + max(w, wb)
-        f, t = mags[mags.shape[0] - span:].T.tolist()           # oldest needed .. newest
-        lagged = span - lag                                     # exclusive end
-        recent_f, recent_t = _mean_of(f, span - w, span), _mean_of(t, span - w, span)
-        derived = {}
-        if self._want_delta:
-            derived['force_delta'] = recent_f - _mean_of(f, lagged - w, lagged)
-            derived['torque_delta'] = recent_t - _mean_of(t, lagged - w, lagged)
-        if self._want_change:
-            fc = derived['force_change'] = recent_f - _median_of(f[lagged - wb:lagged])
-            tc = derived['torque_change'] = recent_t - _median_of(t[lagged - wb:lagged])
-            if self._want_change_max:
-                fmax, tmax = fc, tc
-                for old_f, old_t in self._recent_changes:
-                    fmax = old_f if old_f > fmax else fmax
-                    tmax = old_t if old_t > tmax else tmax
-                derived['force_change_max'], derived['torque_change_max'] = fmax, tmax
-                self._recent_changes.append((fc, tc))
-        if self._angles:
-            # np.arctan2 (math.atan2 rounds differently), every angle in one call
-            values = np.arctan2([derived[dt] for _, _, dt in self._angles],
-                                [derived[df] for _, df, _ in self._angles]).tolist()
-            for (name, _, _), value in zip(self._angles, values):
-                derived[name] = value
-        return [derived[name] for name in self.use_delta]
+        row = np.array([values], dtype=np.float64)
+        ft_t, ft_x = self.push(t=np.array([t], dtype=np.float64), force=row[:, :3],
+                               torque=row[:, 3:])
+        return (float(ft_t[0]), ft_x[0].tolist()) if ft_t.size else None
 
     def _change_max(self, change: np.ndarray) -> np.ndarray:
         # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.
@@ -673,6 +562,18 @@ class ForceTorqueStream:
                            window=self.config.change_max_frames)
         self._recent_changes.extend(map(tuple, change.tolist()))
         return peak
+
+    def _shift_extremes(self, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # *_shift_min and *_shift_max of the (m, 2) new shifts; keeps the newest for the next call
+        before = np.array(self._recent_shifts, dtype=float).reshape(-1, 2)
+        n_before = before.shape[0]
+        k_min, k_max = self.config.shift_min_frames, self.config.change_max_frames
+        low = -running_max(values=-shift, before=-before[max(0, n_before - k_min + 1):],
+                           window=k_min)
+        high = running_max(values=shift, before=before[max(0, n_before - k_max + 1):],
+                           window=k_max)
+        self._recent_shifts.extend(map(tuple, shift.tolist()))
+        return low, high
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.decimation
@@ -692,6 +593,8 @@ class ForceTorqueStream:
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)
         self._mag_ts.extend(dec_t)
+        if self._want_shift:
+            self._vecs.extend(dec_v)
         first_new = self._n_dec
         self._n_dec += n_blocks
         # Frame ends (decimated indices) that fall on the new samples.
@@ -705,6 +608,8 @@ class ForceTorqueStream:
         else:
             feats, times = np.zeros((0, len(self.columns))), np.zeros(0)
         self._mag_ts.keep_last(self.history)
+        if self._want_shift:
+            self._vecs.keep_last(self.history)
         self._mag_start += self._mags.keep_last(self.history)
         return times, feats
 
@@ -752,6 +657,16 @@ class ForceTorqueStream:
                 if self._want_change_max:
                     peak = self._change_max(change)
                     derived['force_change_max'], derived['torque_change_max'] = peak.T
+            if self._want_shift:
+                vecs = self._vecs.view
+                shift = vector_shift(
+                    recent=window_mean(signal=vecs, ends=ends, window=cfg.delta_window),
+                    baseline=window_median(signal=vecs, ends=ends - cfg.shift_lag,
+                                           window=cfg.shift_window))
+                low, high = self._shift_extremes(shift)
+                derived['force_shift'], derived['torque_shift'] = shift.T
+                derived['force_shift_min'], derived['torque_shift_min'] = low.T
+                derived['force_shift_max'], derived['torque_shift_max'] = high.T
         for col, name in enumerate(self.use_delta, start=6):
             out[:, col] = derived[name]
         return out
@@ -785,21 +700,6 @@ def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.nd
                              before, values])
     windows = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
     return windows.max(axis=-1)[-m:]
-
-
-def _mean_of(values: list, lo: int, hi: int) -> float:
-    """Mean of ``values[lo:hi]`` summed in order, as :func:`window_mean`'s ``np.mean`` does."""
-    acc = values[lo]
-    for i in range(lo + 1, hi):
-        acc += values[i]
-    return acc / (hi - lo)
-
-
-def _median_of(values: list) -> float:
-    """Median of ``values``: the value(s) :func:`window_median` selects."""
-    ordered = sorted(values)
-    k = len(ordered) // 2
-    return ordered[k] if len(ordered) % 2 else (ordered[k - 1] + ordered[k]) / 2
 
 
 def _with_angle(names: tuple, change: np.ndarray) -> dict:
@@ -862,6 +762,31 @@ def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.nd
         return np.partition(old, k, axis=1)[:, k]
     part = np.partition(old, (k - 1, k), axis=1)
     return (part[:, k - 1] + part[:, k]) / 2
+
+
+def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
+    """
+    Length of the change of the force and of the torque vector: ``|recent - baseline|``.
+
+    ``force_shift = sqrt(sum_k (F_k - B_k)^2)`` over the three axes ``k``, likewise for the
+    torque. A rotation of the sensor frame, a constant bias (an untared sensor) or the
+    direction of gravity in the sensor frame do not change it.
+
+    Parameters
+    ----------
+    recent, baseline : np.ndarray, shape (m, 6)
+        Force x, y, z in N then torque x, y, z in N m: the newest samples' mean and the
+        baseline's per-axis median (:func:`window_mean`, :func:`window_median`).
+
+    Returns
+    -------
+    np.ndarray, shape (m, 2)
+        ``force_shift`` in N and ``torque_shift`` in N m, >= 0 (0 when nothing changed).
+
+    """
+    change = recent - baseline
+    return np.stack([np.linalg.norm(change[:, :3], axis=1),
+                     np.linalg.norm(change[:, 3:], axis=1)], axis=1)
 
 
 def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:

@@ -84,6 +84,16 @@ class DecisionRule:
         Consecutive frames at or above the threshold needed to report a contact, >= 1.
     refractory_s : float
         Seconds after a reported contact during which no new one is reported, >= 0.
+    average_frames : int
+        Frames averaged before the comparison with ``threshold``, >= 1.
+    sustain_frames, sustain_threshold : int, float
+        Slow path: contact when the mean P(contact) of the newest ``sustain_frames`` frames is
+        ``>= sustain_threshold`` (0 frames = off).
+    evidence_threshold, evidence_drift : float
+        Evidence path (a CUSUM): ``S_i = max(0, S_{i-1} + p_i - evidence_drift)`` over
+        consecutive valid frames, contact when ``S_i >= evidence_threshold`` (0 = off). A
+        forest that is only 0.6-0.9 sure for a few frames accumulates evidence, while frames
+        below ``evidence_drift`` take it away again.
 
     """
 
@@ -93,11 +103,15 @@ class DecisionRule:
     average_frames: int = 1
     sustain_frames: int = 0
     sustain_threshold: float = 0.5
+    evidence_threshold: float = 0.0
+    evidence_drift: float = 0.5
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
         for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf),
-                                ('sustain_threshold', 0.0, 1.0)):
+                                ('sustain_threshold', 0.0, 1.0),
+                                ('evidence_threshold', 0.0, 1000.0),
+                                ('evidence_drift', 0.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
@@ -120,6 +134,9 @@ class DecisionRule:
         if self.sustain_frames > 0:
             text += (f' sustain_frames={self.sustain_frames} '
                      f'sustain_threshold={self.sustain_threshold:.3f}')
+        if self.evidence_threshold > 0:
+            text += (f' evidence_threshold={self.evidence_threshold:.3f} '
+                     f'evidence_drift={self.evidence_drift:.3f}')
         return text
 
     def short(self) -> str:
@@ -129,6 +146,8 @@ class DecisionRule:
             text = f'mean{self.average_frames} ' + text
         if self.sustain_frames > 0:
             text += f' or mean{self.sustain_frames}>={self.sustain_threshold:g}'
+        if self.evidence_threshold > 0:
+            text += f' or sum(p-{self.evidence_drift:g})>={self.evidence_threshold:g}'
         return text
 
     def to_dict(self) -> dict:

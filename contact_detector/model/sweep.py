@@ -152,3 +152,79 @@ def best_row(rows: Sequence[SweepRow]) -> Optional[SweepRow]:
         latency = s['latency_ms_median'] if s['latency_ms_median'] is not None else 1e9
         return (s['premature'], -s['detected'], s['impact_events'], latency)
     return min(rows, key=key) if rows else None
+
+
+@dataclass
+class FamilyRow:
+    """One left-out family: the forest trained on every other family, scored on this one."""
+
+    family: str
+    rows: List[SweepRow]
+
+
+def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetting,
+                         rules: Sequence[DecisionRule], n_estimators: int, seed: int,
+                         jobs: int, families: Optional[Sequence[str]] = None
+                         ) -> List[FamilyRow]:
+    """
+    Train on all families but one, score every rule on the one left out; once per family.
+
+    A family is a trial's ``truth.condition`` (the simulator's condition set, or the name a
+    user gives a folder of recordings). The figure to quote is the worst family, not the
+    pooled mean: a family left out stands for a robot, a room or a controller the model has
+    never seen.
+
+    Parameters
+    ----------
+    frames : sequence of TrialFrames
+        Every trial, every family.
+    setting : FeatureSetting
+        Feature columns and label window.
+    rules : sequence of DecisionRule
+        Rules scored with each fold's forest.
+    n_estimators, seed, jobs : int
+        The forest (as :func:`fit_forest`).
+    families : sequence of str, optional
+        The families to leave out in turn (default: every family present).
+
+    Returns
+    -------
+    list of FamilyRow
+        One per family left out, in the order given (or sorted), each with one row per rule.
+
+    """
+    present = sorted({f.truth.condition for f in frames})
+    out = []
+    for family in (families or present):
+        test = [f for f in frames if f.truth.condition == family]
+        fit = [f for f in frames if f.truth.condition != family]
+        if not test or not fit:
+            continue
+        forest = fit_forest(frames=fit, setting=setting, n_estimators=n_estimators, seed=seed,
+                            jobs=jobs)
+        out.append(FamilyRow(family=family,
+                             rows=score_rules(forest=forest, frames=test, setting=setting,
+                                              rules=rules)))
+    return out
+
+
+def worst_family(summaries: Sequence[dict]) -> Optional[dict]:
+    """
+    The worst of per-family summaries: most premature, then fewest detected, then slowest.
+
+    Parameters
+    ----------
+    summaries : sequence of dict
+        :func:`contact_detector.evaluation.metrics.summarize` outputs, one per family.
+
+    Returns
+    -------
+    dict or None
+        The worst summary (None for no families).
+
+    """
+    def key(s: dict):
+        latency = s['latency_ms_median'] if s['latency_ms_median'] is not None else 1e9
+        caught = s['detected'] / max(1, s['trials'])
+        return (-s['premature'], caught, -latency)
+    return min(summaries, key=key) if summaries else None
