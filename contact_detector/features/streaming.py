@@ -331,10 +331,10 @@ class AudioFramer:
         self._n_total += n
         w, hop = self.frame_length, self.hop
         # Frames i with e_i <= n_total: i <= (n_total - w + 0.5) / hop, checked exactly below.
-        # frame_ends() in Python numbers (a few frames per chunk): the same IEEE operations.
         first = self._next_frame
         upper = int(math.floor((self._n_total - w + 0.5) / hop)) + 2 - first
-        ends = [e for e in (w + math.floor(i * hop + 0.5) for i in range(first, first + upper))
+        ends = [int(e) for e in frame_ends(first=first, count=max(upper, 0), frame_length=w,
+                                           hop=hop)
                 if e <= self._n_total]
         if len(ends) == 1:
             start = ends[0] - w - self._buf_start
@@ -959,13 +959,7 @@ class StreamingFeatureExtractor:
             return [(p,) for p in power.tolist()]
         rel = spectral.power_db_above_floor(power=power, floor=self.floor.update(power))
         rel_values = rel.tolist()
-        if power.size == 1:
-            # _recent_peak for one frame in Python floats (max picks one of the values)
-            history = self._rel_hist + rel_values
-            self._rel_hist = history[1:]
-            peak = [max(history)]
-        else:
-            peak = self._recent_peak(rel).tolist()
+        peak = self._recent_peak(rel).tolist()
         return list(zip(power.tolist(), rel_values, peak, self._rise(rel_values),
                         [pk - r for pk, r in zip(peak, rel_values)]))
 
@@ -1098,8 +1092,6 @@ class StreamingFeatureExtractor:
         t = self._pend_t[:count]
         audio = self._pend_a[:count]
         del self._pend_t[:count], self._pend_a[:count], self._pend_arrival[:count]
-        if count == 1:
-            return self._aligned_one(t[0], audio[0])
         t = np.array(t)
         audio = np.array(audio)
         x = np.zeros((count, len(self.names)))
@@ -1112,16 +1104,3 @@ class StreamingFeatureExtractor:
             rows = np.flatnonzero(valid)[:, None]
             x[rows, self._ft_dst] = self._ft_x[idx[valid]][:, self._ft_col]
         return FeatureFrames(t=t, x=x, valid=valid, names=self.names)
-
-    def _aligned_one(self, t: float, audio: tuple) -> FeatureFrames:
-        # _drain's alignment for one frame, in Python numbers.
-        x = np.zeros((1, len(self.names)))
-        row = x[0]
-        for col, k in self._audio_cols:
-            row[col] = audio[k]
-        ft_t = self._ft_t
-        idx = int(np.searchsorted(ft_t, t, side='right')) - 1
-        valid = idx >= 0 and t - float(ft_t[idx]) <= self.max_ft_age_s
-        if valid:
-            row[self._ft_dst] = self._ft_x[idx, self._ft_col]
-        return FeatureFrames(t=np.array([t]), x=x, valid=np.array([valid]), names=self.names)
