@@ -30,8 +30,11 @@ def build_parser() -> argparse.ArgumentParser:
         prog=PROG,
         description='Write simulated glass-placing trials (wrist F/T, microphone, ground truth) '
                     'as rosbag2 plus a JSON manifest.',
-        epilog=f'Condition sets: {sets}; all: every set. Trial i uses condition i mod '
-               f'len(conditions); within a set the exogenous hits cycle hand, table, none.')
+        epilog=f'Condition sets: {sets}. Aliases: all: the six original sets (paper to '
+               f'odd_chunking); families: the six families (geometry to quiet_contact); wide: '
+               f'all twelve. Trial i uses condition i mod len(conditions); within a set the '
+               f'exogenous hits cycle hand, table, none (exogenous: mixed, touch, brush, '
+               f'setdown).')
     parser.add_argument('out_dir', metavar='OUT_DIR', type=Path,
                         help='directory for the bags and manifest.json (created)')
     parser.add_argument('--trials', type=int, default=6, metavar='N',
@@ -50,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--label-window', type=float, default=0.1, metavar='S',
                         help='length of the labelled onset window (default 0.1 s)')
     parser.add_argument('--conditions', nargs='+', default=['paper'], metavar='SET',
-                        help='condition sets or "all", space or comma separated '
+                        help='condition sets or aliases, space or comma separated '
                              f'(default paper; known: {", ".join([*CONDITION_SETS, *ALIASES])})')
     parser.add_argument('--start-index', type=int, default=0, metavar='I',
                         help='index of the first trial (default 0)')

@@ -5,13 +5,18 @@ Pure numpy (no ROS, no rosbags, no wall clock). A trial imitates the paper's tas
 4.1): an arm holds an object, lifts it to a start position, descends at a few cm/s until the
 object touches the table, keeps pushing until ``|T_y - T_y,baseline| >= 3 N m`` (the recorded
 robot's stop rule), stays there, retreats to the start position and rests. Exogenous impacts
-(hits on the robot's hand or on the table) are added as in the paper. See ``docs/simulator.md``
-for the model and :mod:`contact_detector.sim.conditions` for every parameter range.
+(hits on the robot's hand or on the table) are added as in the paper. The families of
+:mod:`.conditions` change the structure: the sensor's orientation and lever arm, tared sensors,
+stop rules on ``|F - F_base|`` / ``|T - T_base|`` or on the load transferred, a spring or a
+compliant contact, the approach speed profile, touches / brushing / objects set down nearby,
+a quiet contact and other ego noise. See ``docs/simulator.md`` for the model and
+:mod:`contact_detector.sim.conditions` for every parameter range.
 
 Frames and units
 ----------------
 World: z up. Sensor frame (``wrist_ft_sensor_frame``): the hand axis is +z (pointing forward,
-horizontal), world "up" is close to -x (plus a random tilt). The sensor reports the load's
+horizontal), world "up" is close to -x (plus a random tilt); in the 'geometry' family any
+orientation. The sensor reports the load's
 wrench on the sensor, in N and N m, so at rest ``F ~ (m_object + m_hand) g`` along +x and
 ``T_y ~ +L m g``; the table's reaction reduces ``T_y`` (the paper's threshold was -3 N m).
 
@@ -19,7 +24,8 @@ Randomness
 ----------
 ``np.random.default_rng([seed, index])`` draws the parameters (:mod:`.conditions`); independent
 streams ``[seed, index, k]`` draw the hit plan (k=1), the F/T sensor noise (k=2), the audio
-(k=3) and the chunking (k=4). The hit plan therefore never changes the other parameters:
+(k=3), the chunking (k=4), the geometry (k=5) and, for the families only, the family
+parameters and hit kind (k=6). The hit plan therefore never changes the other parameters:
 ``simulate_trial(..., hits='none')`` is the same trial without its exogenous impacts.
 """
 
@@ -30,7 +36,8 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from contact_detector.errors import ConfigError
-from contact_detector.sim.conditions import get_condition, resolve_conditions
+from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_KINDS, get_condition,
+                                             resolve_conditions)
 
 #: Gravity in m/s^2.
 G = 9.81
@@ -49,8 +56,11 @@ REF_SPEED = 0.04
 #: Absolute start time of trial ``index``: ``T0 + TRIAL_SPACING_S * index`` seconds.
 T0 = 1_700_000_000
 TRIAL_SPACING_S = 100
-#: Hit kinds of the paper's exogenous impacts, and 'none'.
-HIT_KINDS = ('none', 'hand', 'table')
+#: Hit kinds: 'none', the paper's exogenous impacts ('hand', 'table'), the families' events
+#: ('touch', 'brush', 'setdown') and 'mixed' (each event draws one of the five).
+HIT_KINDS = ('none', 'hand', 'table', 'touch', 'brush', 'setdown', 'mixed')
+#: Stop rules on vectors ('force', 'wrench', 'load') average the wrench over this window (s).
+STOP_SMOOTH_S = 0.03
 #: Phase names in order.
 PHASES = ('rest', 'lift', 'hold', 'accelerate', 'descend', 'push', 'settle', 'retreat', 'rest')
 
@@ -285,13 +295,16 @@ class _Hit:
     vib_n: float = 0.0
     vib_hz: float = 30.0
     window: str = ''
+    dur: float = 0.0          # duration of a touch or a brush, s
+    seed: int = 0             # stream of a brush's force fluctuation
+    on_object: bool = True    # a touch on the object (else on the arm)
 
     def time(self, anchors: dict) -> float:
         return anchors[self.anchor] + self.t
 
 
 def _plan_hits(*, kind: str, count: int, rng: np.random.Generator, p: dict, tl: dict,
-               stop_est: float, R: np.ndarray) -> list[_Hit]:
+               stop_est: float, R: np.ndarray, q: dict, r_obj: np.ndarray) -> list[_Hit]:
     """Place ``count`` hits of ``kind`` (see module doc); times relative to the trial start."""
     if kind == 'none':
         return []
@@ -303,17 +316,28 @@ def _plan_hits(*, kind: str, count: int, rng: np.random.Generator, p: dict, tl: 
         'contact': ('stop', 0.1, settle_rel - 0.05, 0.2),
         'post_air': ('end', 0.1, p['rest_end_s'] - 0.3, 0.1),
     }
-    if kind == 'table' and stop_est - 0.05 > tl['onset'] + _MIN_HIT_GAP_S:
+    if kind in ('table', 'setdown', 'touch', 'mixed') \
+            and stop_est - 0.05 > tl['onset'] + _MIN_HIT_GAP_S:
         windows['push'] = ('abs', tl['onset'] + _MIN_HIT_GAP_S, stop_est - 0.05, 0.1)
     nominal = {'abs': 0.0, 'stop': stop_est, 'end': stop_est + settle_rel + p['retreat_s']}
-    names = list(windows)
-    probs = np.array([windows[w][3] for w in names])
-    probs /= probs.sum()
     hits: list[_Hit] = []
     for _ in range(count):
+        k = kind if kind != 'mixed' else EVENT_KINDS[int(rng.integers(0, len(EVENT_KINDS)))]
+        dur = 0.0
+        if k == 'touch':
+            dur = q['touch_s'] * float(rng.uniform(0.8, 1.2))
+        elif k == 'brush':
+            dur = q['brush_s'] * float(rng.uniform(0.8, 1.2))
+        if k == 'brush':
+            names = ['moving_air']  # brushing something needs the arm to move
+        else:
+            names = [w for w in windows if w != 'push' or k in ('table', 'setdown', 'touch')]
+        probs = np.array([windows[w][3] for w in names])
+        probs /= probs.sum()
         for _attempt in range(30):
             w = names[int(rng.choice(len(names), p=probs))]
             anchor, lo, hi, _p = windows[w]
+            hi = hi - dur
             if hi <= lo:
                 continue
             t = float(rng.uniform(lo, hi))
@@ -322,22 +346,47 @@ def _plan_hits(*, kind: str, count: int, rng: np.random.Generator, p: dict, tl: 
                 break
         else:
             continue
-        if kind == 'hand':
+        if k == 'hand':
             amp = p['hand_hit_amp_fs'] * float(rng.uniform(0.6, 1.4))
             # knocks come from above or from the side, in world terms
             world = _unit([rng.normal(), rng.normal(), -abs(rng.normal()) * 1.5])
             direction = R @ world
             point = (float(rng.uniform(-0.03, 0.03)), float(rng.uniform(-0.03, 0.03)),
                      float(rng.uniform(0.05, 0.15)))
-            hits.append(_Hit(kind=kind, anchor=anchor, t=t, sound_amp=amp,
+            hits.append(_Hit(kind=k, anchor=anchor, t=t, sound_amp=amp,
                              force_n=p['hand_hit_force_n'] * float(rng.uniform(0.7, 1.3)),
                              pulse_s=float(rng.uniform(0.008, 0.03)),
                              direction=tuple(direction), point=point, window=w))
-        else:
+        elif k == 'table':
             amp = p['table_hit_amp_fs'] * float(rng.uniform(0.6, 1.4))
-            hits.append(_Hit(kind=kind, anchor=anchor, t=t, sound_amp=amp,
+            hits.append(_Hit(kind=k, anchor=anchor, t=t, sound_amp=amp,
                              vib_n=p['table_hit_vib_n'] * float(rng.uniform(0.7, 1.3)),
                              vib_hz=float(rng.uniform(15.0, 45.0)), window=w))
+        elif k == 'touch':
+            # a person touching or pushing: slow, smooth, little sound (a faint rustle)
+            amp = float(math.exp(rng.uniform(math.log(0.0005), math.log(0.004))))
+            on_object = bool(rng.uniform() < 0.6)
+            direction = R @ _unit(rng.normal(size=3))
+            point = r_obj + rng.uniform(-0.02, 0.02, 3)
+            hits.append(_Hit(kind=k, anchor=anchor, t=t, sound_amp=amp,
+                             force_n=q['touch_force_n'] * float(rng.uniform(0.7, 1.3)),
+                             pulse_s=dur, dur=dur, direction=tuple(direction),
+                             point=tuple(point), on_object=on_object, window=w))
+        elif k == 'brush':
+            # friction against the motion (the arm moves down) plus a sideways part
+            world = _unit([rng.normal() * 0.7, rng.normal() * 0.7, 1.0])
+            point = r_obj * float(rng.uniform(0.3, 1.0))
+            hits.append(_Hit(kind=k, anchor=anchor, t=t,
+                             sound_amp=q['brush_amp_fs'] * float(rng.uniform(0.7, 1.3)),
+                             force_n=q['brush_force_n'] * float(rng.uniform(0.7, 1.3)),
+                             pulse_s=dur, dur=dur, direction=tuple(R @ world),
+                             point=tuple(point), seed=int(rng.integers(0, 2 ** 31)),
+                             window=w))
+        else:  # 'setdown': another object set down on the table nearby
+            hits.append(_Hit(kind=k, anchor=anchor, t=t,
+                             sound_amp=q['setdown_amp_fs'] * float(rng.uniform(0.6, 1.4)),
+                             vib_n=q['setdown_vib_n'] * float(rng.uniform(0.7, 1.3)),
+                             vib_hz=float(rng.uniform(20.0, 60.0)), window=w))
     hits.sort(key=lambda h: h.time(nominal))
     return hits
 
@@ -373,12 +422,16 @@ class _Setup:
     drift: list                   # (amp_f (3,), amp_t (3,), period, phase) terms
     noise_f: np.ndarray           # (n_max, 3) unit normal
     noise_t: np.ndarray
+    q: dict                       # family parameters (conditions.FAMILY_DEFAULTS)
+    ctau: float                   # lag of the load transfer, s
+    thr_f: float = 0.0            # vector stop rules' thresholds (N, N m)
+    thr_t: float = 0.0
 
 
 def _stop_ramps(s: _Setup, stop_rel: float) -> tuple[list, dict]:
     """Ramps and timeline after the stop rule fired at ``stop_rel`` (relative seconds)."""
     p, tl = s.p, dict(s.tl)
-    v_d = p['descent_speed_mps']
+    v_d = tl['v_c']
     t_s = stop_rel + p['stop_latency_s']
     t_r0 = t_s + p['stop_decel_s'] + p['settle_s']
     push_depth = v_d * (t_s - tl['onset']) + 0.5 * v_d * p['stop_decel_s']
@@ -421,7 +474,10 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
     in_contact = (t >= onset) & (t < t_end)
     depth = np.where(in_contact, np.maximum(z_contact - z, 0.0), 0.0)
     tau = np.maximum(t - onset, 0.0)
-    normal = s.k_eff * depth * (1 - np.exp(-tau / p['contact_tau_s']))
+    if s.q['contact_model'] == 'spring':
+        normal = s.k_eff * depth
+    else:
+        normal = s.k_eff * depth * (1 - np.exp(-tau / s.ctau))
     if 't_s' in tl:
         since = np.maximum(t - tl['t_s'], 0.0)
         normal *= 1 - p['creep'] * (1 - np.exp(-since / 0.3))
@@ -431,12 +487,14 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
 
     comps = []  # (scalar series, direction (3,), point (3,))
     comps.append((-s.m_obj * (G + a_eff), s.up, s.r_obj))
-    comps.append((-s.m_hand * (G + a_eff), s.up, s.r_hand))
+    # a tool-compensated sensor removes the hand's static weight (not its inertia)
+    g_hand = 0.0 if s.q['tool_compensated'] else G
+    comps.append((-s.m_hand * (g_hand + a_eff), s.up, s.r_hand))
     comps.append((normal, s.up, s.r_contact))
     comps.append((p['friction'] * normal, s.fric_dir, s.r_contact))
 
     # contact impact pulse
-    j_imp = (s.m_obj + 0.5 * s.m_hand) * v_d * p['impact_transmission'] * 0.5
+    j_imp = (s.m_obj + 0.5 * s.m_hand) * tl['v_c'] * p['impact_transmission'] * 0.5
     d_imp = p['impact_duration_s']
     comps.append((_half_sine(t, onset, d_imp, j_imp * np.pi / (2 * d_imp)), s.up, s.r_contact))
 
@@ -462,8 +520,26 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
             pulse = _half_sine(t, th, h.pulse_s, h.force_n * hit_scale)
             comps.append((pulse, np.asarray(h.direction), np.asarray(h.point)))
             exc += 0.5 * pulse * float(np.dot(h.direction, s.mode_dir))
+        elif h.kind == 'touch':
+            tt = np.clip(t - th, 0.0, h.dur)
+            f = np.where((t >= th) & (t <= th + h.dur),
+                         h.force_n * hit_scale * 0.5 * (1 - np.cos(2 * np.pi * tt / h.dur)), 0.0)
+            if h.on_object:
+                comps.append((f, np.asarray(h.direction), np.asarray(h.point)))
+            else:  # pushing the arm: the wrist feels the inertial reaction and the mode
+                comps.append((0.15 * f, np.asarray(h.direction), s.r_load))
+            exc += 0.3 * np.gradient(f, dt) * 0.05 * float(np.dot(h.direction, s.mode_dir))
+        elif h.kind == 'brush':
+            tt = t - th
+            edge = np.clip(np.minimum(tt, h.dur - tt) / 0.03, 0.0, 1.0)
+            knots = np.random.default_rng(h.seed).standard_normal(int(h.dur * 200) + 2)
+            fluct = np.interp(tt, np.arange(len(knots)) / 200.0, knots)
+            f = h.force_n * hit_scale * edge * np.clip(1 + 0.35 * fluct, 0.0, None)
+            comps.append((f, np.asarray(h.direction), np.asarray(h.point)))
+            exc += 0.2 * f * float(np.dot(h.direction, s.mode_dir))
         elif onset <= th < t_end:
-            # a knock on the table reaches the sensor only through the object on it
+            # a knock on the table (or an object set down on it) reaches the sensor only
+            # through the object on it
             tt = np.maximum(t - th, 0.0)
             vib = np.where(t >= th, h.vib_n * np.exp(-tt / 0.06)
                            * np.sin(2 * np.pi * h.vib_hz * tt), 0.0)
@@ -503,6 +579,11 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
         torque += wave * amp_t
     force += p['force_noise_n'] * s.noise_f[:n_out]
     torque += p['torque_noise_nm'] * s.noise_t[:n_out]
+    if s.q['tared']:
+        # tared at rest before the lift: the bias cancels the static load measured then
+        j0, j1 = _tare_window(s)
+        force -= force[j0:j1].mean(axis=0)
+        torque -= torque[j0:j1].mean(axis=0)
     force = np.round(force / p['force_quant_n']) * p['force_quant_n']
     torque = np.round(torque / p['torque_quant_nm']) * p['torque_quant_nm']
     return force, torque, t_end
@@ -514,19 +595,52 @@ def _baseline(s: _Setup, torque: np.ndarray) -> tuple[float, int, int]:
     return float(torque[j0:j1, 1].mean()), j0, j1
 
 
-def _first_crossing(s: _Setup, torque: np.ndarray) -> tuple[int | None, float]:
-    """Index of the first sample from the descent start on with |T_y - base| >= 3 N m."""
-    base, _, j_acc = _baseline(s, torque)
-    hit = np.nonzero(np.abs(torque[j_acc:, 1] - base) >= STOP_TORQUE_NM)[0]
-    return (int(hit[0]) + j_acc if len(hit) else None), base
+def _tare_window(s: _Setup) -> tuple[int, int]:
+    """Output samples of the tare: 0.2 s to 0.2 s before the lift (the robot at rest)."""
+    j0 = int(round(0.2 * s.ft_rate))
+    return j0, max(j0 + 1, int(math.floor((s.tl['t_lift0'] - 0.2) * s.ft_rate)))
+
+
+def _first_crossing(s: _Setup, force: np.ndarray,
+                    torque: np.ndarray) -> tuple[int | None, float]:
+    """
+    Index of the sample where the robot's stop rule fires, and the T_y baseline.
+
+    'torque_y' (the recorded robot): the first sample from the start of ``accelerate`` with
+    ``|T_y - base| >= 3 N m``. The vector rules use the wrench averaged over the last
+    ``STOP_SMOOTH_S`` and the mean wrench of the baseline window, armed once the descent speed
+    is reached: 'force' and 'load' ``|F - F_base| >= thr_f``, 'wrench' also
+    ``|T - T_base| >= thr_t``.
+    """
+    base, j0, j_acc = _baseline(s, torque)
+    rule = s.q['stop_rule']
+    if rule == 'torque_y':
+        hit = np.nonzero(np.abs(torque[j_acc:, 1] - base) >= STOP_TORQUE_NM)[0]
+        return (int(hit[0]) + j_acc if len(hit) else None), base
+    w = max(1, int(round(STOP_SMOOTH_S * s.ft_rate)))
+    j_arm = max(j_acc, int(math.ceil(s.tl['t_desc0'] * s.ft_rate)))
+    over = np.zeros(len(force), dtype=bool)
+    for sig, thr in ((force, s.thr_f), (torque, s.thr_t if rule == 'wrench' else math.inf)):
+        if not math.isfinite(thr):
+            continue
+        c = np.cumsum(np.vstack([np.zeros((1, 3)), sig]), axis=0)
+        smooth = np.empty_like(sig)
+        idx = np.arange(len(sig))
+        lo = np.maximum(idx + 1 - w, 0)
+        smooth[:] = (c[idx + 1] - c[lo]) / (idx + 1 - lo)[:, None]
+        ref = sig[j0:j_acc].mean(axis=0)
+        over |= np.linalg.norm(smooth - ref, axis=1) >= thr
+    hit = np.nonzero(over[j_arm:])[0]
+    return (int(hit[0]) + j_arm if len(hit) else None), base
 
 
 # --------------------------------------------------------------------------------------------
 # audio
 
 
-def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list, tl: dict,
-           hits: list[_Hit], anchors: dict, duration: float) -> tuple[np.ndarray, dict]:
+def _audio(*, p: dict, q: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
+           tl: dict, hits: list[_Hit], anchors: dict,
+           duration: float) -> tuple[np.ndarray, dict]:
     """Microphone signal as int16 and a dict of audio facts for the params."""
     t = np.arange(n) / rate
     x = p['bg_rms_fs'] * _shaped_noise(rng, n, rate, _pink_shape)
@@ -539,6 +653,8 @@ def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
     fan = _shaped_noise(rng, n, rate, _band_shape(150.0, 1200.0))
     x += p['fan_rms_fs'] * (0.8 * fan + 0.6 * math.sqrt(2) * np.sin(2 * np.pi * fan_hz * t))
     facts: dict = {'fan_hz': fan_hz}
+    # a muted or far microphone hears only the room (kept aside here)
+    room = x.copy() if q['mic_mode'] == 'noise_only' else None
     # household babble: speech-shaped noise, talkers switching on and off with syllabic AM
     if p['babble_rms_fs'] > 0:
         talkers = int(rng.integers(2, 5))
@@ -596,7 +712,9 @@ def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
 
     # the contact sound: glass modes (bright) + table modes, loudness ~ speed and hardness
     delay = p['mic_distance_m'] / SOUND_SPEED
-    peak = p['contact_amp_fs'] * p['hardness'] * (v_d / REF_SPEED)
+    peak = p['contact_amp_fs'] * p['hardness'] * (tl['v_c'] / REF_SPEED)
+    if q['contact_sound_db'] != 0.0:
+        peak *= 10 ** (q['contact_sound_db'] / 20)
     bright = p['brightness']
     lo, hi = p['table_modes_hz']
     gf, gd, ga = _mode_set(rng, n=int(rng.integers(2, 5)), lo=1000.0, hi=8000.0,
@@ -624,7 +742,7 @@ def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
                                    decay=float(rng.uniform(0.008, 0.04)), peak=h.sound_amp)
             _add_modal(x, rate=rate, t0=th, freqs=fr, decays=de, amps=am, attack_s=0.0005,
                        click_amp=0.4 * h.sound_amp, click_decay_s=0.0015, rng=rng)
-        else:
+        elif h.kind == 'table':
             fr, de, am = _mode_set(rng, n=3, lo=100.0, hi=1500.0,
                                    decay=float(rng.uniform(0.01, 0.05)), peak=0.7 * h.sound_amp)
             fr.append(float(rng.uniform(60.0, 150.0)))
@@ -632,6 +750,67 @@ def _audio(*, p: dict, rng: np.random.Generator, rate: int, n: int, ramps: list,
             am.append(0.3 * h.sound_amp)
             _add_modal(x, rate=rate, t0=th, freqs=fr, decays=de, amps=am, attack_s=0.001,
                        click_amp=0.3 * h.sound_amp, click_decay_s=0.002, rng=rng)
+        elif h.kind == 'setdown':
+            # a cup or plate set down nearby: a contact-like sound (object and table modes)
+            fr, de, am = _mode_set(rng, n=3, lo=800.0, hi=7000.0,
+                                   decay=float(rng.uniform(0.01, 0.06)), peak=0.7 * h.sound_amp)
+            fr2, de2, am2 = _mode_set(rng, n=2, lo=100.0, hi=1500.0,
+                                      decay=float(rng.uniform(0.005, 0.04)),
+                                      peak=0.5 * h.sound_amp)
+            _add_modal(x, rate=rate, t0=th, freqs=fr + fr2, decays=de + de2, amps=am + am2,
+                       attack_s=float(rng.uniform(0.0003, 0.003)), click_amp=0.3 * h.sound_amp,
+                       click_decay_s=0.0015, rng=rng)
+        else:  # 'touch' (a faint rustle) or 'brush' (scraping, stick-slip modulated)
+            i0 = max(0, int(th * rate))
+            i1 = min(n, int((th + h.dur) * rate))
+            if i1 - i0 < 8:
+                continue
+            tt = np.arange(i1 - i0) / rate
+            if h.kind == 'touch':
+                noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(200.0, 2000.0))
+                env = 0.5 * (1 - np.cos(2 * np.pi * tt / h.dur))
+            else:
+                noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(1000.0, 6000.0))
+                slip = float(rng.uniform(8.0, 30.0))
+                env = np.clip(np.minimum(tt, h.dur - tt) / 0.02, 0.0, 1.0) * (
+                    0.6 + 0.4 * np.abs(np.sin(np.pi * slip * tt + rng.uniform(0, np.pi))))
+            x[i0:i1] += h.sound_amp * env * noise
+
+    # ego-noise families besides the motor whine
+    fam = q['ego_family']
+    lvl = q['ego_extra_rms_fs']
+    if fam == 'fan':
+        blade = float(rng.uniform(60.0, 400.0))
+        x += lvl * (_shaped_noise(rng, n, rate, _band_shape(100.0, 6000.0))
+                    * (1 + 0.1 * np.sin(2 * np.pi * 0.3 * t))
+                    + 0.5 * math.sqrt(2) * np.sin(2 * np.pi * blade * t))
+        facts['ego_fan_blade_hz'] = blade
+    elif fam == 'gear':
+        gear_hz = float(rng.uniform(1000.0, min(5000.0, 0.2 * rate)))
+        gphase = 2 * np.pi * np.cumsum(gear_hz * np.minimum(speed, 2.0)) / rate
+        comb = sum(np.sin(k * gphase[moving]) / k for k in (1, 2, 3)
+                   if gear_hz * k * 2.0 < 0.45 * rate)
+        x[moving] += level[moving] * lvl * math.sqrt(2) * comb
+        facts['ego_gear_hz'] = gear_hz
+    elif fam == 'servo':
+        noise = _shaped_noise(rng, n, rate, _band_shape(1500.0, 6000.0))
+        gate = np.zeros(n)
+        bursts = []
+        pos = float(rng.uniform(0.0, 1.0))
+        per_s = float(rng.uniform(0.5, 2.0))
+        while pos < duration:
+            length = float(rng.uniform(0.05, 0.5))
+            i0, i1 = int(pos * rate), min(n, int((pos + length) * rate))
+            if i1 > i0:
+                k = np.arange(i1 - i0)
+                ramp = np.minimum(1.0, np.minimum(k, i1 - i0 - 1 - k) / (0.005 * rate))
+                gate[i0:i1] = np.maximum(gate[i0:i1], ramp)
+                bursts.append([pos, length])
+            pos += length + float(rng.exponential(1.0 / per_s))
+        x += lvl * gate * noise
+        facts['ego_servo_bursts'] = bursts
+    if room is not None:
+        x = room
 
     # microphone: gain with slow AGC-like changes, DC offset, int16 with clipping
     gain_db = p['agc_depth_db'] * np.sin(2 * np.pi * p['agc_hz'] * t + rng.uniform(0, 2 * np.pi))
@@ -710,8 +889,10 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     label_window_s : float
         Length of the labelled onset window ``[onset_t, onset_t + label_window_s)`` in s.
     hits : str or None
-        'none', 'hand' or 'table' exogenous impacts; None draws one of them uniformly.
-        Changing it changes nothing else in the trial.
+        'none', 'hand', 'table', 'touch', 'brush', 'setdown' or 'mixed' exogenous events
+        (:data:`HIT_KINDS`); None draws one of 'none', 'hand', 'table' uniformly (the
+        'exogenous' set: one of its ``hit_cycle``). Changing it changes nothing else in the
+        trial.
 
     Returns
     -------
@@ -730,6 +911,10 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     rng = np.random.default_rng([seed, index])
     p = cond.sample(rng)
     drawn_kind = HIT_KINDS[int(rng.integers(0, 3))]
+    fam_rng = np.random.default_rng([seed, index, 6])
+    q, q_drawn = cond.sample_family(fam_rng)
+    if cond.hit_cycle != DEFAULT_HIT_CYCLE:
+        drawn_kind = cond.hit_cycle[int(fam_rng.integers(0, len(cond.hit_cycle)))]
     hit_kind = hits if hits is not None else drawn_kind
     geo_rng = np.random.default_rng([seed, index, 5])
     hit_rng = np.random.default_rng([seed, index, 1])
@@ -738,21 +923,34 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     chunk_rng = np.random.default_rng([seed, index, 4])
 
     # ---- geometry
-    R0 = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-    tilt_axis = np.array([0.0, *geo_rng.normal(size=2)])
-    R = _rotation(tilt_axis + np.array([geo_rng.normal() * 0.3, 0.0, 0.0]),
-                  math.radians(p['tilt_deg'])) @ R0
-    up = R @ np.array([0.0, 0.0, 1.0])
-    off_dir = geo_rng.uniform(0, 2 * np.pi)
-    r_obj = np.array([p['com_offset_m'] * math.cos(off_dir), p['com_offset_m'] * math.sin(off_dir),
-                      p['lever_arm_m']])
-    r_contact = r_obj - 0.5 * p['object_height_m'] * up \
-        + np.array([0.0, 0.0, p['contact_lever_offset_m']])
-    r_hand = np.array([0.01, 0.0, p['hand_lever_m']])
+    if q['frame'] == 'hsr':
+        R0 = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+        tilt_axis = np.array([0.0, *geo_rng.normal(size=2)])
+        R = _rotation(tilt_axis + np.array([geo_rng.normal() * 0.3, 0.0, 0.0]),
+                      math.radians(p['tilt_deg'])) @ R0
+        up = R @ np.array([0.0, 0.0, 1.0])
+        off_dir = geo_rng.uniform(0, 2 * np.pi)
+        r_obj = np.array([p['com_offset_m'] * math.cos(off_dir),
+                          p['com_offset_m'] * math.sin(off_dir), p['lever_arm_m']])
+        r_contact = r_obj - 0.5 * p['object_height_m'] * up \
+            + np.array([0.0, 0.0, p['contact_lever_offset_m']])
+        r_hand = np.array([0.01, 0.0, p['hand_lever_m']])
+    else:
+        R = _frame_rotation(geo_rng, q['frame'])
+        up = R @ np.array([0.0, 0.0, 1.0])
+        # the contact point anywhere at contact_lever_m from the sensor, not above it
+        d = _unit(geo_rng.normal(size=3))
+        c = float(d @ up)
+        if c > 0:
+            d = d - 2 * c * up
+        r_contact = q['contact_lever_m'] * d
+        r_obj = r_contact + 0.5 * p['object_height_m'] * up
+        r_hand = p['hand_lever_m'] * d
     m_obj = p['object_mass_kg'] + p['liquid_mass_kg']
     m_hand = p['hand_mass_kg']
     r_load = (m_obj * r_obj + m_hand * r_hand) / (m_obj + m_hand)
     k_eff = 1.0 / (1.0 / p['arm_stiffness_npm'] + 1.0 / p['surface_stiffness_npm'])
+    ctau = p['contact_tau_s']
     ang = geo_rng.uniform(0, 2 * np.pi, 3)
     fric_dir = R @ np.array([math.cos(ang[0]), math.sin(ang[0]), 0.0])
     slosh_dir = R @ _unit([math.cos(ang[1]), math.sin(ang[1]), 0.3])
@@ -769,24 +967,51 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     t_desc0 = t_acc0 + p['accel_s']
     onset = t_desc0 + p['descend_s']
     base_ramps = [(v_l, t_lift0, ra), (-v_l, t_hold0 - ra, ra), (-v_d, t_acc0, p['accel_s'])]
+    v_c = v_d
+    if q['decel']:
+        # a careful controller slows down to v_c before the expected table height
+        v_c = min(v_d, max(0.005, v_d * q['decel_ratio']))
+        dec_s = min(q['decel_s'], p['descend_s'] - 0.2)
+        base_ramps.append((v_d - v_c, onset - 0.05 - dec_s, dec_s))
     z_contact = _ramp_pos(base_ramps, onset)
+    descent_dist = v_d * (0.5 * p['accel_s'] + p['descend_s'])
+    if q['decel']:
+        descent_dist = p['lift_dist_m'] - z_contact
     tl = dict(t_lift0=t_lift0, t_hold0=t_hold0, t_acc0=t_acc0, t_desc0=t_desc0, onset=onset,
-              z_contact=z_contact, descent_dist=v_d * (0.5 * p['accel_s'] + p['descend_s']))
+              z_contact=z_contact, descent_dist=descent_dist, v_c=v_c)
+    if q['contact_model'] == 'compliant':
+        # the object's weight moves to the table in about transfer_s
+        k_eff = m_obj * G / (v_c * q['transfer_s'])
+        ctau = q['transfer_s'] / 4
+    thr_f, thr_t = 0.0, math.inf
+    if q['stop_rule'] in ('force', 'wrench'):
+        thr_f = q['stop_force_n']
+        thr_t = q['stop_torque_nm'] if q['stop_rule'] == 'wrench' else math.inf
+    elif q['stop_rule'] == 'load':
+        thr_f = max(1.0, q['stop_load_frac'] * m_obj * G)
 
     # ---- nominal stop (noise-free) for placing hits
-    lever_y = abs(float(np.cross(r_contact, up)[1]))
-    n_need = STOP_TORQUE_NM / max(lever_y, 1e-3)
-    tau = n_need / (k_eff * v_d)
-    for _ in range(20):
-        tau = n_need / (k_eff * v_d) / max(1e-6, 1 - math.exp(-tau / p['contact_tau_s']))
+    if q['stop_rule'] == 'torque_y':
+        lever_y = abs(float(np.cross(r_contact, up)[1]))
+        n_need = STOP_TORQUE_NM / max(lever_y, 1e-3)
+    else:
+        lever = float(np.linalg.norm(np.cross(r_contact, up)))
+        n_need = min(thr_f, thr_t / max(lever, 1e-3))
+    if q['contact_model'] == 'spring':
+        tau = n_need / (k_eff * v_c)
+    else:
+        tau = n_need / (k_eff * v_c)
+        for _ in range(20):
+            tau = n_need / (k_eff * v_c) / max(1e-6, 1 - math.exp(-tau / ctau))
     stop_est = onset + tau
     hit_plan = _plan_hits(kind=hit_kind, count=p['hit_count'], rng=hit_rng, p=p, tl=tl,
-                          stop_est=stop_est, R=R)
+                          stop_est=stop_est, R=R, q=q, r_obj=r_obj)
+    horizon = q['push_horizon_s']
 
     # ---- sensor noise for the longest possible trial (so both passes share it)
     post = p['stop_latency_s'] + p['stop_decel_s'] + p['settle_s'] + p['retreat_s'] \
-        + p['rest_end_s'] + (tl['descent_dist'] + v_d * PUSH_HORIZON_S) / MAX_RETREAT_SPEED
-    n_max = int(math.ceil((onset + PUSH_HORIZON_S + post) * ft_rate)) + 2
+        + p['rest_end_s'] + (tl['descent_dist'] + v_d * horizon) / MAX_RETREAT_SPEED
+    n_max = int(math.ceil((onset + horizon + post) * ft_rate)) + 2
     bias_f = _unit(noise_rng.normal(size=3)) * p['force_bias_n']
     bias_t = _unit(noise_rng.normal(size=3)) * p['torque_bias_nm']
     drift = []
@@ -803,22 +1028,29 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
                    r_hand=r_hand, r_load=r_load, fric_dir=fric_dir, slosh_dir=slosh_dir,
                    mode_dir=mode_dir, ripple_dir=ripple_dir, m_obj=m_obj, m_hand=m_hand,
                    k_eff=k_eff, tl=tl, base_ramps=base_ramps, bias_f=bias_f, bias_t=bias_t,
-                   drift=drift, noise_f=noise_f, noise_t=noise_t)
+                   drift=drift, noise_f=noise_f, noise_t=noise_t, q=q, ctau=ctau,
+                   thr_f=thr_f, thr_t=thr_t)
 
-    # ---- pass 1: push until the measured |delta T_y| reaches 3 N m
-    n1 = int(math.floor((onset + PUSH_HORIZON_S) * ft_rate)) + 1
+    # ---- pass 1: push until the robot's stop rule fires (the recorded robot: |delta T_y| 3 N m)
+    n1 = int(math.floor((onset + horizon) * ft_rate)) + 1
     hit_scale = 1.0
+    thr_scale = 1.0
     pre_stop_hits = [h for h in hit_plan if h.anchor == 'abs']
-    for _ in range(6):
-        _f, torque1, _ = _ft(setup, n_out=n1, ramps=base_ramps, tl=tl, hits=pre_stop_hits,
-                             anchors={'abs': 0.0}, hit_scale=hit_scale)
-        j_stop, _base = _first_crossing(setup, torque1)
+    family = bool(cond.family)
+    for _ in range(12 if family else 6):
+        force1, torque1, _ = _ft(setup, n_out=n1, ramps=base_ramps, tl=tl, hits=pre_stop_hits,
+                                 anchors={'abs': 0.0}, hit_scale=hit_scale)
+        j_stop, _base = _first_crossing(setup, force1, torque1)
         if j_stop is None:
             raise RuntimeError('simulator: the stop rule was not reached within '
-                               f'{PUSH_HORIZON_S} s (seed={seed}, index={index})')
+                               f'{horizon} s (seed={seed}, index={index})')
         if j_stop / ft_rate >= onset:
             break
         hit_scale *= 0.5  # a hand hit in the air must not trigger the robot's stop rule
+        if family:
+            # a controller whose threshold fires in the air would be re-tuned higher
+            thr_scale *= 1.25
+            setup.thr_f, setup.thr_t = thr_f * thr_scale, thr_t * thr_scale
     else:
         raise RuntimeError(f'simulator: stop rule fired before contact (seed={seed}, '
                            f'index={index})')
@@ -831,7 +1063,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     anchors = {'abs': 0.0, 'stop': stop_rel, 'end': tl2['t_r1']}
     force, torque, t_end = _ft(setup, n_out=n_out, ramps=ramps, tl=tl2, hits=hit_plan,
                                anchors=anchors, hit_scale=hit_scale)
-    j_check, base = _first_crossing(setup, torque)
+    j_check, base = _first_crossing(setup, force, torque)
     if j_check != j_stop:
         raise RuntimeError(f'simulator: inconsistent stop ({j_check} != {j_stop})')
     if not tl2['t_r0'] < t_end < tl2['t_r1']:
@@ -841,7 +1073,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     n_audio = int(math.floor(duration * audio_rate))
     ends, jitter, n_audio = _chunks(p=p, rng=chunk_rng, n=n_audio, rate=audio_rate,
                                     chunk_size=chunk_size)
-    audio, audio_facts = _audio(p=p, rng=audio_rng, rate=audio_rate, n=n_audio, ramps=ramps,
+    audio, audio_facts = _audio(p=p, q=q, rng=audio_rng, rate=audio_rate, n=n_audio, ramps=ramps,
                                 tl=tl2, hits=hit_plan, anchors=anchors, duration=duration)
 
     # ---- absolute times and bookkeeping
@@ -866,6 +1098,11 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         if h.kind == 'hand':
             info.update(force_n=h.force_n * hit_scale, pulse_s=h.pulse_s,
                         direction=list(h.direction), point_m=list(h.point))
+        elif h.kind in ('touch', 'brush'):
+            info.update(force_n=h.force_n * hit_scale, duration_s=h.dur,
+                        direction=list(h.direction), point_m=list(h.point))
+            if h.kind == 'touch':
+                info['on_object'] = h.on_object
         else:
             info.update(vib_n=h.vib_n if not in_air else 0.0, vib_hz=h.vib_hz)
         hit_info.append(info)
@@ -892,7 +1129,28 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         'hit_details': hit_info,
     }
     derived.update(audio_facts)
+    if family:
+        j_t0, j_t1 = _tare_window(setup)
+        j_b1 = int(math.floor(tl['t_acc0'] * ft_rate))
+        j_b0 = max(0, j_b1 - int(round(BASELINE_WINDOW_S * ft_rate)))
+        derived.update({
+            'frame': q['frame'],
+            'stop_rule': q['stop_rule'],
+            'stop_threshold_n': setup.thr_f if q['stop_rule'] != 'torque_y' else None,
+            'stop_threshold_torque_nm': setup.thr_t if q['stop_rule'] == 'wrench' else None,
+            'stop_threshold_scale': thr_scale,
+            'baseline_force_n': force[j_b0:j_b1].mean(axis=0),
+            'baseline_torque_nm': torque[j_b0:j_b1].mean(axis=0),
+            'tare_window': [start + j_t0 / ft_rate, start + j_t1 / ft_rate],
+            'contact_speed_mps': v_c,
+            'contact_tau_s': ctau,
+            'weight_transfer_s': _weight_transfer_s(k_eff=k_eff, v_c=v_c, ctau=ctau,
+                                                    weight=m_obj * G,
+                                                    spring=q['contact_model'] == 'spring'),
+        })
     params = dict(p)
+    if family:
+        params['family'] = _jsonable(q)
     params['derived'] = _jsonable(derived)
     return Trial(name=f'trial_{index:04d}', condition=condition, seed=seed, start_time=start,
                  ft_rate=ft_rate, wrench_t=start + wrench_rel, force=force, torque=torque,
@@ -908,20 +1166,50 @@ def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',)
     """
     Yield ``n`` trials; trial ``i`` uses ``conditions[i % len(conditions)]``.
 
-    Within each condition set the hit kinds cycle 'hand', 'table', 'none' (so about a third
-    of each set's trials get hand hits and a third table hits, as in the paper's 20/20/20 of
-    60). ``conditions`` may contain the alias 'all'. Other keywords go to
+    Within each condition set the hit kinds cycle its ``hit_cycle``: 'hand', 'table', 'none'
+    (so about a third of each set's trials get hand hits and a third table hits, as in the
+    paper's 20/20/20 of 60); 'mixed', 'touch', 'brush', 'setdown' for 'exogenous'.
+    ``conditions`` may contain the aliases 'all', 'families' and 'wide'. Other keywords go to
     :func:`simulate_trial`.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f'n must be an int >= 0, got {n!r}')
     names = resolve_conditions(conditions)
-    kinds = ('hand', 'table', 'none')
     for i in range(start_index, start_index + int(n)):
         cond = names[i % len(names)]
-        hits = kw['hits'] if 'hits' in kw else kinds[(i // len(names)) % 3]
+        kinds = get_condition(cond).hit_cycle
+        hits = kw['hits'] if 'hits' in kw else kinds[(i // len(names)) % len(kinds)]
         rest = {k: v for k, v in kw.items() if k != 'hits'}
         yield simulate_trial(seed=seed, index=i, condition=cond, hits=hits, **rest)
+
+
+def _frame_rotation(rng: np.random.Generator, kind: str) -> np.ndarray:
+    """
+    World -> sensor rotation of a sensor mounted at any orientation.
+
+    'random': uniform over all rotations (a unit quaternion of four normals). 'axis': world
+    up along one of the six signed sensor axes, then a uniform rotation about world up.
+    """
+    if kind == 'random':
+        w, x, y, z = _unit(rng.normal(size=4))
+        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    k = int(rng.integers(0, 3))
+    j = (k + 1 + int(rng.integers(0, 2))) % 3
+    up = np.eye(3)[k] * (1.0 if rng.uniform() < 0.5 else -1.0)
+    xw = np.eye(3)[j] * (1.0 if rng.uniform() < 0.5 else -1.0)
+    base = np.column_stack([xw, np.cross(up, xw), up])
+    return base @ _rotation(np.array([0.0, 0.0, 1.0]), float(rng.uniform(0, 2 * np.pi)))
+
+
+def _weight_transfer_s(*, k_eff: float, v_c: float, ctau: float, weight: float,
+                       spring: bool) -> float:
+    """Noise-free time in s from the onset until the table carries the object's weight."""
+    tau = np.arange(1, 200001) * 1e-5
+    normal = k_eff * v_c * tau * (1.0 if spring else (1 - np.exp(-tau / ctau)))
+    idx = np.nonzero(normal >= weight)[0]
+    return float(tau[idx[0]]) if len(idx) else math.inf
 
 
 def _jsonable(value):
