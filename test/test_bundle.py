@@ -111,7 +111,8 @@ def test_model_card(saved: Path, forest: RandomForestClassifier) -> None:
     assert card['feature_config'] == CONFIG.to_dict()
     assert card['decision_rule'] == {'threshold': 0.6, 'confirm_frames': 2, 'refractory_s': 0.5,
                                      'average_frames': 1, 'sustain_frames': 0,
-                                     'sustain_threshold': 0.5}
+                                     'sustain_threshold': 0.5, 'evidence_threshold': 0.0,
+                                     'evidence_drift': 0.5}
     assert card['versions']['scikit-learn'] == sklearn.__version__
     assert card['created'] == '2026-03-01T12:00:00+00:00'
     assert len(card['forest']['tree_node_counts']) == 4

@@ -550,7 +550,8 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
     assert bundle.forest.n_estimators == bundle.metrics['trial']['best_n_estimators']
     assert bundle.decision_rule.to_dict() == {
         'threshold': 0.85, 'confirm_frames': 1, 'refractory_s': 1.0, 'average_frames': 1,
-        'sustain_frames': 10, 'sustain_threshold': 0.4}
+        'sustain_frames': 10, 'sustain_threshold': 0.4, 'evidence_threshold': 0.0,
+        'evidence_drift': 0.5}
     # detect applies the bundle's rule, and the node's parameters override it.
     params = tmp_path / 'p.yaml'
     params.write_text('contact_detector:\n  ros__parameters:\n    release:\n'

@@ -90,7 +90,8 @@ def test_node_parameters_to_rule_overrides():
     # The defaults of params/contact_detector.yaml leave the model's rule alone ...
     unset = {'release.threshold': -1.0, 'release.confirm_frames': 0,
              'release.refractory_s': -1.0, 'release.average_frames': 0,
-             'release.sustain_frames': -1, 'release.sustain_threshold': -1.0}
+             'release.sustain_frames': -1, 'release.sustain_threshold': -1.0,
+             'release.evidence_threshold': -1.0, 'release.evidence_drift': -1.0}
     assert rule_overrides(unset) == {} and rule_overrides({}) == {}
     # ... and 0 turns the slow path off, while 0 confirm frames means "the model's".
     assert rule_overrides({**unset, 'release.sustain_frames': 0, 'release.threshold': 0.9}) == {

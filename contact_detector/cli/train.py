@@ -67,8 +67,14 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                          'samples in the median baseline of the *_change features'),
                         ('rise_frames', 'audio frames back to the reference of audio_rise_db'),
                         ('change_max_frames',
-                         'F/T feature frames over which the *_change_max features take the '
-                         'maximum')):
+                         'F/T feature frames over which the *_change_max and *_shift_max '
+                         'features take the maximum'),
+                        ('shift_min_frames',
+                         'F/T feature frames over which the *_shift_min features take the '
+                         'minimum'),
+                        ('shift_lag', 'F/T samples from the newest to the end of the '
+                                      '*_shift baseline'),
+                        ('shift_window', 'F/T samples in the median baseline of *_shift')):
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
@@ -89,6 +95,11 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                              'frames >= --sustain-threshold (0 = off)')
     parser.add_argument('--sustain-threshold', type=float,
                         default=DEFAULT_RULE.sustain_threshold)
+    parser.add_argument('--evidence-threshold', type=float,
+                        default=DEFAULT_RULE.evidence_threshold,
+                        help='evidence path: also contact when the sum of P(contact) - '
+                             '--evidence-drift over consecutive frames reaches this (0 = off)')
+    parser.add_argument('--evidence-drift', type=float, default=DEFAULT_RULE.evidence_drift)
 
 
 def tree_counts(text: str) -> list:
@@ -110,7 +121,9 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,
-                        sustain_threshold=args.sustain_threshold)
+                        sustain_threshold=args.sustain_threshold,
+                        evidence_threshold=args.evidence_threshold,
+                        evidence_drift=args.evidence_drift)
 
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:
@@ -120,7 +133,9 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,
-                         change_max_frames=args.change_max_frames, extra_features=extra)
+                         change_max_frames=args.change_max_frames,
+                         shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
+                         shift_window=args.shift_window, extra_features=extra)
 
 
 def conditions_of(bags: Sequence[Path]) -> dict:

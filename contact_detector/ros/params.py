@@ -131,6 +131,12 @@ PARAMS: Sequence[ParamSpec] = (
               '= the decision rule of the model.', -1, 1000, read_only=False),
     ParamSpec('release.sustain_threshold', -1.0, 'Threshold of the slow path; negative = the '
               'decision rule of the model.', -1.0, 1.0, read_only=False),
+    ParamSpec('release.evidence_threshold', -1.0, 'Evidence path: a frame is also contact when '
+              'the sum of P(contact) - release.evidence_drift over consecutive frames (never '
+              'below 0) reaches this (0 = off); negative = the decision rule of the model.',
+              -1.0, 1000.0, read_only=False),
+    ParamSpec('release.evidence_drift', -1.0, 'What each frame subtracts from the evidence; '
+              'negative = the decision rule of the model.', -1.0, 1.0, read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',
