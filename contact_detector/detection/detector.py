@@ -217,7 +217,7 @@ class ContactDetector:
         self.settings = settings
         self.rule = settings.rule or bundle.decision_rule
         try:
-            self.forest = CompiledForest.from_sklearn(bundle.forest)
+            self.forest = bundle.compile()
             self.extractor = StreamingFeatureExtractor(
                 config=bundle.feature_config, audio_rate=settings.audio_rate,
                 ft_input_rate=settings.wrench_rate, max_ft_age_s=settings.max_ft_age_s,
