@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Rebuild the shipped model: simulate the training set, then train with the defaults chosen
-# by the sweep (docs/sweep.md). Writes models/contact_forest.npz (loads with numpy alone), its card and report.
+# by the sweep (docs/sweep.md). Writes models/contact_forest.npz (loads with numpy alone), its
+# card and report.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
