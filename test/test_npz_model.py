@@ -508,9 +508,9 @@ def test_frame_report_equals_sklearns_classification_report() -> None:
         y_true = (rng.random(n) < rng.random() ** 2).astype(int)
         y_pred = np.where(rng.random(n) < 0.5 + rng.random() / 2, y_true, 1 - y_true)
         text, report = frame_report(y_true=y_true, y_pred=y_pred)
-        assert report == classification_report(y_true, y_pred, labels=[0, 1],
-                                                target_names=names, zero_division=0,
-                                                output_dict=True)
+        expected = classification_report(y_true, y_pred, labels=[0, 1], target_names=names,
+                                         zero_division=0, output_dict=True)
+        assert report == expected
         if report['accuracy'] > 0:
             assert text == classification_report(y_true, y_pred, labels=[0, 1],
-                                                  target_names=names, zero_division=0)
+                                                 target_names=names, zero_division=0)

@@ -67,5 +67,5 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f'contact-detector convert-model: {err}', file=sys.stderr)
         return 1
     print(f'{args.target} written ({args.target.stat().st_size} bytes), model {bundle.model_id}; '
-          f'probabilities equal scikit-learn\'s bit for bit')
+          f"probabilities equal scikit-learn's bit for bit")
     return 0

@@ -178,8 +178,9 @@ def frame_report(*, y_true: np.ndarray, y_pred: np.ndarray,
 
     The same numbers and layout as ``sklearn.metrics.classification_report(y_true, y_pred,
     labels=[0, 1], target_names=names, zero_division=0)``: precision = TP / (TP + FP), recall
-    = TP / (TP + FN), F1 = 2 TP / (2 TP + FP + FN) (= 2 P R / (P + R)), each 0 when its denominator is 0; ``macro avg``
-    the plain mean over the two classes, ``weighted avg`` the mean weighted by support.
+    = TP / (TP + FN), F1 = 2 TP / (2 TP + FP + FN) (= 2 P R / (P + R)), each 0 when its
+    denominator is 0; ``macro avg`` the plain mean over the two classes, ``weighted avg`` the
+    mean weighted by support.
 
     Parameters
     ----------

@@ -581,7 +581,7 @@ def save_bundle(*, bundle: ModelBundle, path: Path, fmt: Optional[str] = None,
 
 
 def _sklearn_forest_of(bundle: ModelBundle) -> Any:
-    """The scikit-learn forest the legacy formats store, or a ModelError."""
+    """Return the scikit-learn forest the legacy formats store, or raise ModelError."""
     if bundle.sklearn_forest is None:
         raise ModelError('this bundle holds its forest as arrays (it was loaded from an npz '
                          'file); it can only be saved as npz')
@@ -617,7 +617,7 @@ def _check_written_npz(*, bundle: ModelBundle, path: Path,
         expected_one = forest.predict_proba(single)[:, 1] if len(single) else one
         if not (np.array_equal(_bits(compiled.predict_proba(x)), _bits(expected))
                 and np.array_equal(_bits(one), _bits(expected_one))):
-            raise ModelError(f'the npz forest\'s probabilities differ from scikit-learn '
+            raise ModelError(f"the npz forest's probabilities differ from scikit-learn "
                              f'{_sklearn_version()} predict_proba on {len(x)} frames; the model '
                              'was not saved (is this forest from scikit-learn >= 1.4?)')
 

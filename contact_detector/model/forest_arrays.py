@@ -204,7 +204,7 @@ class ForestArrays:
             return f'feature index out of range [0, {self.n_features}) at a split'
         if np.any(feature[leaf] != TREE_UNDEFINED) or np.any(self.threshold[leaf]
                                                              != TREE_UNDEFINED):
-            return 'leaves must have feature -2 and threshold -2.0 (scikit-learn\'s markers)'
+            return "leaves must have feature -2 and threshold -2.0 (scikit-learn's markers)"
         if not np.all(np.isfinite(self.threshold)):
             return 'a threshold is not finite'
         value = self.value
@@ -270,7 +270,7 @@ class ForestArrays:
 
     def flat(self) -> Dict[str, np.ndarray]:
         """
-        The trees as one array set with global indices (for :class:`CompiledForest`).
+        Return the trees as one array set with global indices (for :class:`CompiledForest`).
 
         Returns
         -------
