@@ -429,6 +429,19 @@ print(len(releases), releases[0] - trial.onset_t if releases else None)
     assert count == '1' and 0.0 <= float(delay) < 0.3, done.stdout
 
 
+def test_run_time_commands_import_no_sklearn_or_joblib() -> None:
+    code = ("import sys\nfor n in ('sklearn', 'joblib', 'skops'):\n    sys.modules[n] = None\n"
+            'import contact_detector.cli.demo, contact_detector.cli.detect  # noqa: E401\n'
+            'import contact_detector.cli.evaluate, contact_detector.ros.node  # noqa: E401\n'
+            'from contact_detector.cli.main import main\n'
+            'sys.exit(main(["train", "--help"]))\n')
+    done = subprocess.run([sys.executable, '-c', code], cwd=REPO, capture_output=True,
+                          text=True, timeout=120)
+    # Even train's --help works: scikit-learn is imported only when training starts.
+    assert done.returncode == 0, done.stderr
+    assert 'contact_forest.npz' in done.stdout
+
+
 def test_detect_and_evaluate_run_without_sklearn(tmp_path: Path) -> None:
     bags = tmp_path / 'bags'
     subprocess.run([sys.executable, '-m', 'contact_detector.cli.main', 'simulate', str(bags),
