@@ -14,17 +14,18 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml', 'README.md']),
         ('share/' + package_name + '/params', glob('params/*.yaml')),
-        ('share/' + package_name + '/models', glob('models/*.joblib') + glob('models/*.json')
+        ('share/' + package_name + '/models', glob('models/*.npz') + glob('models/*.json')
          + glob('models/*.md')),
     ],
     python_requires='>=3.10',
     # Pure-Python dependencies only: on a ROS install rclpy and the messages come from apt.
+    # The ranges admit Ubuntu 24.04's apt versions (numpy 1.26.4, scipy 1.11.4, PyYAML 6.0.1;
+    # tools/ubuntu2404_env.sh tests them). The node, detect and evaluate load the npz model
+    # with numpy alone; scikit-learn is for train and sweep (the `train` extra).
     install_requires=[
         'setuptools',
         'numpy>=1.24,<3',
         'scipy>=1.10,<2',
-        'scikit-learn>=1.4,<2',
-        'joblib>=1.3,<2',
         'rosbags>=0.10,<0.12',
         'matplotlib>=3.6,<4',
         'tqdm>=4.60,<5',
@@ -33,6 +34,9 @@ setup(
     extras_require={
         # ROS 2 Jazzy from PyPI wheels, for machines without apt ROS.
         'ros': ['ros-jazzy-rclpy[fastrtps]>=7.1,<8', 'ros-jazzy-common-interfaces>=5.3,<6'],
+        # train, sweep and the legacy .joblib/.skops models (Ubuntu 24.04: scikit-learn
+        # 1.4.1.post1, joblib 1.3.2).
+        'train': ['scikit-learn>=1.4,<2', 'joblib>=1.3,<2', 'skops>=0.10,<1'],
         'safe': ['skops>=0.10,<1'],
         'test': ['pytest>=7', 'hypothesis>=6.80', 'flake8>=6', 'flake8-quotes>=3.3',
                  'pydocstyle>=6.3', 'psutil>=5.9'],

@@ -9,7 +9,7 @@ frames, then reports medians over ``--repeats`` runs:
   individually timed calls (these include ~0.1 us of timer overhead);
 * ``CompiledForest.predict_proba`` on a batch, per frame;
 * ``RandomForestClassifier.predict_proba`` on one frame (one call) and on the batch, per frame;
-* ``load_bundle`` time and file size for the joblib and the skops format, and the time to
+* ``load_bundle`` time and file size for the npz, joblib and skops formats, and the time to
   build the CompiledForest.
 
 Usage::
@@ -125,7 +125,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                          versions=runtime_versions(), created='2026-01-01T00:00:00+00:00')
     formats = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for fmt in ('joblib', 'skops'):
+        for fmt in ('npz', 'joblib', 'skops'):
             path = Path(tmp) / f'model_{fmt}.{fmt}'
             start = time.perf_counter()
             save_bundle(bundle=bundle, path=path, fmt=fmt)

@@ -16,7 +16,7 @@ was not trained on): ``evaluate --detector all`` scores every detector on the sa
 comparison table and the detected / premature counts by condition are printed, and the full
 report (summary.md, metrics.json, trials.json, latency.png) is written to ``WORK/report``.
 
-Uses the shipped ``models/contact_forest.joblib`` if present, else ``--model``. Prints markdown.
+Uses the shipped ``models/contact_forest.npz`` if present, else ``--model``. Prints markdown.
 
 Usage::
 
@@ -152,7 +152,7 @@ def by_condition_table(results: dict) -> str:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog='bench_offline', description=__doc__.split('\n')[1])
     parser.add_argument('--model', type=Path, default=None,
-                        help='model bundle (default: the shipped models/contact_forest.joblib)')
+                        help='model bundle (default: the shipped models/contact_forest.npz)')
     parser.add_argument('--rtf-trials', type=int, default=16, help='bags timed for (a)')
     parser.add_argument('--trials', type=int, default=60, help='held-out trials for (b)')
     parser.add_argument('--seed', type=int, default=1000,

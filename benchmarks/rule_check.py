@@ -5,7 +5,7 @@ shipped model is trained by the paper's protocol on 75% of them. This script che
 choice on the model that actually ships: on its own trial-split test trials and on a held-out
 simulated set. It is how the default rule in docs/sweep.md was validated.
 
-    python benchmarks/rule_check.py data/train data/heldout [--model models/contact_forest.joblib]
+    python benchmarks/rule_check.py data/train data/heldout [--model models/contact_forest.npz]
 """
 
 import argparse
@@ -48,7 +48,7 @@ def main() -> None:
             continue
         frames = compute_frames(events_by_trial=events, config=bundle.feature_config,
                                 audio_rate=rate, wrench_rate=wrench, jobs=args.jobs)
-        rows = score_rules(forest=bundle.forest, frames=list(frames.values()),
+        rows = score_rules(forest=bundle.compile(), frames=list(frames.values()),
                            setting=setting, rules=rules)
         for row in rows:
             row.setting = tag

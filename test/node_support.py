@@ -1,7 +1,7 @@
 """Shared helpers of the node tests: a small test model and simulated-trial message streams.
 
 Used by test_node.py, test_e2e_node.py, e2e_publisher.py and benchmarks/bench_node.py. The
-model is the shipped ``models/contact_forest.joblib`` when it exists, otherwise a small forest
+model is the shipped ``models/contact_forest.npz`` when it exists, otherwise a small forest
 (8 trees) trained here on features of simulated trials, saved with ``save_bundle``.
 """
 
@@ -21,7 +21,7 @@ from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.sim.trial import simulate_trial, Trial
 
 REPO = Path(__file__).resolve().parents[1]
-SHIPPED_MODEL = REPO / 'models' / 'contact_forest.joblib'
+SHIPPED_MODEL = REPO / 'models' / 'contact_forest.npz'
 #: Simulator seed of the test model's training trials; test trials use other seeds.
 TRAIN_SEED = 7
 TRAIN_TRIALS = 12
@@ -118,7 +118,7 @@ def model_path(directory: Path, *, allow_shipped: bool = True) -> Path:
     if allow_shipped and SHIPPED_MODEL.is_file():
         return SHIPPED_MODEL
     if 'model' not in _cache or not _cache['model'].is_file():
-        _cache['model'] = train_test_model(Path(directory) / 'test_forest.joblib')
+        _cache['model'] = train_test_model(Path(directory) / 'test_forest.npz')
     return _cache['model']
 
 

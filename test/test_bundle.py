@@ -321,11 +321,11 @@ def test_decision_rule() -> None:
 def test_find_model(tmp_path: Path) -> None:
     first, second = tmp_path / 'a', tmp_path / 'b'
     second.mkdir()
-    (second / 'contact_forest.joblib').write_bytes(b'x')
-    assert find_model(dirs=[first, second]) == second / 'contact_forest.joblib'
+    (second / 'contact_forest.npz').write_bytes(b'x')
+    assert find_model(dirs=[first, second]) == second / 'contact_forest.npz'
     first.mkdir()
-    (first / 'contact_forest.joblib').write_bytes(b'x')
-    assert find_model(dirs=[first, second]) == first / 'contact_forest.joblib'
+    (first / 'contact_forest.npz').write_bytes(b'x')
+    assert find_model(dirs=[first, second]) == first / 'contact_forest.npz'
     with pytest.raises(ModelError, match='searched .*contact-detector train'):
         find_model(dirs=[tmp_path / 'none'])
 
@@ -334,6 +334,6 @@ def test_default_model_path_finds_a_file_or_says_what_to_do() -> None:
     try:
         path = default_model_path()
     except ModelError as err:
-        assert 'contact_forest.joblib' in str(err) and 'contact-detector train' in str(err)
+        assert 'contact_forest.npz' in str(err) and 'contact-detector train' in str(err)
     else:
-        assert path.is_file() and path.name == 'contact_forest.joblib'
+        assert path.is_file() and path.name == 'contact_forest.npz'

@@ -78,7 +78,7 @@ def bundle(tmp_path_factory):
                        decision_rule=DecisionRule(threshold=0.5, confirm_frames=2),
                        versions=runtime_versions(), training={'source': 'test_fuzz'},
                        created=datetime(2026, 1, 1).isoformat())
-    path = save_bundle(bundle=made, path=tmp_path_factory.mktemp('fuzz') / 'tiny.joblib')
+    path = save_bundle(bundle=made, path=tmp_path_factory.mktemp('fuzz') / 'tiny.npz')
     return load_bundle(path=path)
 
 

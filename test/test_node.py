@@ -430,14 +430,14 @@ def test_main_exits_non_zero_with_a_clear_message(tmp_path):
     env = dict(os.environ)
     repo = Path(__file__).resolve().parents[1]
     cmd = [sys.executable, '-m', 'contact_detector.ros.node', '--ros-args',
-           '-p', f'model.path:={tmp_path / "missing.joblib"}']
+           '-p', f'model.path:={tmp_path / "missing.npz"}']
     done = subprocess.run(cmd, env=env, cwd=repo, capture_output=True, text=True, timeout=60)
     assert done.returncode == 1
-    assert 'cannot start' in done.stderr and 'missing.joblib does not exist' in done.stderr
+    assert 'cannot start' in done.stderr and 'missing.npz does not exist' in done.stderr
 
 
 def test_bad_model_is_a_model_error(context, tmp_path):
-    bad = tmp_path / 'bad.joblib'
+    bad = tmp_path / 'bad.npz'
     bad.write_bytes(b'not a model')
     with pytest.raises(ModelError):
         ContactDetectorNode(context=context,

@@ -121,7 +121,7 @@ def data(tmp_path_factory):
     for trial in trials:
         write_trial_bag(trial=trial, path=bags / trial.name)
     write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=bags)
-    model = root / 'm.joblib'
+    model = root / 'm.npz'
     assert train_cli.main([str(bags), '--no-events', '--jobs', '1', '--out', str(model)]) == 0
     return {'root': root, 'bags': bags, 'trials': {t.name: t for t in trials}, 'model': model,
             'bundle': load_bundle(path=model)}
@@ -284,9 +284,9 @@ def test_detect_errors_are_clean(data, tmp_path, capsys):
                           '--out', str(tmp_path / 'x.jsonl')]) == 1
     assert 'no such bag' in capsys.readouterr().err
     assert cli_main.main(['detect', str(data['bags'] / 'trial_0000'), '--model',
-                          str(tmp_path / 'missing.joblib'), '--out',
+                          str(tmp_path / 'missing.npz'), '--out',
                           str(tmp_path / 'x.jsonl')]) == 1
-    assert 'missing.joblib' in capsys.readouterr().err
+    assert 'missing.npz' in capsys.readouterr().err
 
 
 # --- evaluate ------------------------------------------------------------------------------------
@@ -495,7 +495,7 @@ def test_train_with_labels_csv(data, no_truth, tmp_path):
     lines += [f'{n},{data["trials"][n].onset_t!r},{data["trials"][n].onset_end_t!r}'
               for n in names]
     labels.write_text('\n'.join(lines) + '\n')
-    model = tmp_path / 'labels.joblib'
+    model = tmp_path / 'labels.npz'
     assert train_cli.main([str(out), '--labels', str(labels), '--no-events', '--jobs', '1',
                            '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
@@ -507,17 +507,17 @@ def test_train_with_labels_csv(data, no_truth, tmp_path):
     # A CSV that misses a bag is refused before any work.
     labels.write_text('\n'.join(lines[:-1]) + '\n')
     assert train_cli.main([str(out), '--labels', str(labels), '--jobs', '1', '--out',
-                           str(tmp_path / 'x.joblib')]) == 1
+                           str(tmp_path / 'x.npz')]) == 1
 
 
 def test_no_truth_and_no_labels_is_a_clear_error(data, no_truth, tmp_path, capsys):
     out, _ = no_truth
     result = run_cli('train', out, '--no-events', '--jobs', '1', '--out',
-                     tmp_path / 'x.joblib', check=False)
+                     tmp_path / 'x.npz', check=False)
     assert result.returncode == 1
     assert 'Traceback' not in result.stderr
     assert '/contact_truth' in result.stderr and '--labels' in result.stderr
-    assert not (tmp_path / 'x.joblib').exists()
+    assert not (tmp_path / 'x.npz').exists()
     # evaluate needs a truth too: a manifest entry or /contact_truth.
     assert cli_main.main(['evaluate', str(out / 'trial_0000'), '--model',
                           str(data['model'])]) == 1
@@ -532,7 +532,7 @@ def test_copy_helper_really_drops_the_truth(no_truth):
 
 
 def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
-    model = tmp_path / 'rule.joblib'
+    model = tmp_path / 'rule.npz'
     assert train_cli.main([str(data['bags']), '--no-events', '--jobs', '1', '--trees', '2,4-5',
                            '--threshold', '0.85', '--confirm-frames', '1',
                            '--sustain-frames', '10', '--sustain-threshold', '0.4',

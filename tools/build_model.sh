@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Rebuild the shipped model: simulate the training set, then train with the defaults chosen
-# by the sweep (docs/sweep.md). Writes models/contact_forest.joblib, its card and report.
+# by the sweep (docs/sweep.md). Writes models/contact_forest.npz (loads with numpy alone), its
+# card and report.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
@@ -8,5 +9,5 @@ cd "$root"
 data="${1:-$root/data/train}"
 .venv/bin/contact-detector simulate "$data" --trials 240 --seed 11 --conditions all \
   --overwrite --quiet
-.venv/bin/contact-detector train "$data" --out models/contact_forest.joblib \
+.venv/bin/contact-detector train "$data" --out models/contact_forest.npz \
   --report models/report --jobs 2 --seed 0

@@ -25,8 +25,8 @@ from contact_detector.cli.train import conditions_of
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError, ContactDetectorError
 from contact_detector.evaluation.baselines import BASELINES, make_baseline
-from contact_detector.evaluation.metrics import (frame_labels, outcome_dicts, score_trial,
-                                                 summarize_by_condition, Truth)
+from contact_detector.evaluation.metrics import (frame_labels, frame_report, outcome_dicts,
+                                                 score_trial, summarize_by_condition, Truth)
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 
@@ -59,8 +59,6 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
         detector -> {'outcomes': [...], 'summary': {...}, 'frames': {...} (forest only)}
 
     """
-    from sklearn.metrics import classification_report
-
     manifest = conditions_of(bags)
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     y_true, y_pred = [], []
@@ -85,12 +83,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
                          'summary': summarize_by_condition(outcomes[name])}
     if y_true:
         yt, yp = np.concatenate(y_true), np.concatenate(y_pred)
-        names = ['not contact', 'contact']
-        results['forest']['frames'] = {
-            'text': classification_report(yt, yp, labels=[0, 1], target_names=names,
-                                          zero_division=0),
-            'dict': classification_report(yt, yp, labels=[0, 1], target_names=names,
-                                          output_dict=True, zero_division=0)}
+        text, report = frame_report(y_true=yt, y_pred=yp)
+        results['forest']['frames'] = {'text': text, 'dict': report}
     return results
 
 

@@ -15,6 +15,7 @@ COMMANDS = {
     'evaluate': ('evaluate', 'event metrics of the forest and the baselines against truth'),
     'replay': ('replay', 'publish a bag into the live ROS graph with its original timing'),
     'sweep': ('sweep', 'sweep feature and decision settings on held-out trials'),
+    'convert-model': ('convert_model', 'convert a joblib/skops model to the npz format'),
 }
 
 

@@ -1,6 +1,6 @@
 """``contact-detector train``: train the contact forest the paper's way and write its report.
 
-    contact-detector train BAG_OR_DIR... --out models/contact_forest.joblib --report DIR
+    contact-detector train BAG_OR_DIR... --out models/contact_forest.npz --report DIR
 
 Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with rows
 ``bag,onset_start,onset_end``); features from the same streaming core the node runs. The report
@@ -15,7 +15,6 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from joblib import delayed, Parallel
 import numpy as np
 from tqdm import tqdm
 
@@ -234,11 +233,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog='contact-detector train', description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('bags', nargs='+', help='bag directories or folders of bags')
-    parser.add_argument('--out', type=Path, default=Path('models/contact_forest.joblib'))
+    parser.add_argument('--out', type=Path, default=Path('models/contact_forest.npz'),
+                        help='model file; its suffix (.npz, .joblib, .skops) picks the format '
+                             'unless --format is given (default models/contact_forest.npz)')
     parser.add_argument('--report', type=Path, default=None, help='report directory')
     parser.add_argument('--labels', type=Path, default=None,
                         help='CSV of bag,onset_start,onset_end (instead of /contact_truth)')
-    parser.add_argument('--format', choices=('joblib', 'skops'), default='joblib')
+    parser.add_argument('--format', choices=('npz', 'joblib', 'skops'), default=None,
+                        help='model format (default: from the --out suffix; npz loads with '
+                             'numpy alone, docs/model.md)')
     parser.add_argument('--jobs', type=int, default=1, help='parallel workers')
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
@@ -260,6 +263,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def _train(args: argparse.Namespace) -> int:
+    from joblib import delayed, Parallel  # training only: scikit-learn's dependency
+
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
     rule = rule_from_args(args)
@@ -316,7 +321,7 @@ def _train(args: argparse.Namespace) -> int:
             bundle=bundle, bags=tqdm(test_bags, desc='events', unit='bag'), spec=spec,
             audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, manifest=manifest)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    path = save_bundle(bundle=bundle, path=args.out, fmt=args.format)
+    path = save_bundle(bundle=bundle, path=args.out, fmt=args.format, check_frames=x)
     print(f'model written to {path}')
     print(f'trial split: n_estimators={quoted.best_n}, test AUC {quoted.test_auc:.4f}, '
           f'10-fold CV accuracy {quoted.cv_mean:.5f} (SD {quoted.cv_sd:.5f})')

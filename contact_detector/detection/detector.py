@@ -18,7 +18,6 @@ from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
                                                  TimeJumpError, to_unit_audio)
 from contact_detector.model.bundle import DecisionRule, ModelBundle
-from contact_detector.model.compiled_forest import CompiledForest
 
 #: A dropped message's stamp is trusted at most this far ahead of the newest accepted input, s
 #: (a corrupt message may carry any stamp; its hold-off must not block releases for ever).
@@ -217,7 +216,7 @@ class ContactDetector:
         self.settings = settings
         self.rule = settings.rule or bundle.decision_rule
         try:
-            self.forest = CompiledForest.from_sklearn(bundle.forest)
+            self.forest = bundle.compile()
             self.extractor = StreamingFeatureExtractor(
                 config=bundle.feature_config, audio_rate=settings.audio_rate,
                 ft_input_rate=settings.wrench_rate, max_ft_age_s=settings.max_ft_age_s,

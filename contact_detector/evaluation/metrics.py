@@ -168,3 +168,67 @@ def frame_labels(*, t: np.ndarray, onsets: Sequence[float], start_s: float,
     for onset in onsets:
         labels[(t >= onset + start_s) & (t < onset + end_s)] = 1
     return labels
+
+
+def frame_report(*, y_true: np.ndarray, y_pred: np.ndarray,
+                 names: Sequence[str] = ('not contact', 'contact'),
+                 digits: int = 2) -> tuple:
+    """
+    Per-class precision, recall, F1 and support of binary frame labels, without scikit-learn.
+
+    The same numbers and layout as ``sklearn.metrics.classification_report(y_true, y_pred,
+    labels=[0, 1], target_names=names, zero_division=0)``: precision = TP / (TP + FP), recall
+    = TP / (TP + FN), F1 = 2 TP / (2 TP + FP + FN) (= 2 P R / (P + R)), each 0 when its
+    denominator is 0; ``macro avg`` the plain mean over the two classes, ``weighted avg`` the
+    mean weighted by support.
+
+    Parameters
+    ----------
+    y_true, y_pred : np.ndarray of int, shape (n,)
+        Labels in {0, 1}.
+    names : sequence of str
+        Names of class 0 and class 1.
+    digits : int
+        Decimals in the text.
+
+    Returns
+    -------
+    (str, dict)
+        The text table and the dict form (``output_dict=True``).
+
+    """
+    y_true = np.asarray(y_true).astype(int)
+    y_pred = np.asarray(y_pred).astype(int)
+    rows = []
+    for label in (0, 1):
+        tp = float(np.sum((y_pred == label) & (y_true == label)))
+        predicted = float(np.sum(y_pred == label))
+        support = float(np.sum(y_true == label))
+        precision = tp / predicted if predicted else 0.0
+        recall = tp / support if support else 0.0
+        f1_den = predicted + support  # = 2 TP + FP + FN
+        f1 = 2 * tp / f1_den if f1_den else 0.0
+        rows.append((precision, recall, f1, support))
+    total = rows[0][3] + rows[1][3]
+    scores = np.array([row[:3] for row in rows])
+    support = np.array([row[3] for row in rows])
+    macro = tuple(float(v) for v in scores.mean(axis=0)) + (total,)
+    weighted = (tuple(float(v) for v in np.average(scores, axis=0, weights=support))
+                if total else (0.0, 0.0, 0.0)) + (total,)
+    accuracy = float(np.mean(y_true == y_pred)) if y_true.size else 0.0
+    keys = ('precision', 'recall', 'f1-score', 'support')
+    report = {name: dict(zip(keys, row)) for name, row in zip(names, rows)}
+    report['accuracy'] = accuracy
+    report['macro avg'] = dict(zip(keys, macro))
+    report['weighted avg'] = dict(zip(keys, weighted))
+    width = max(max(len(name) for name in names), len('weighted avg'), digits)
+    row_fmt = '{:>{width}s} ' + ' {:>9.{digits}f}' * 3 + ' {:>9}\n'
+    text = ('{:>{width}s} ' + ' {:>9}' * 4).format('', *keys, width=width) + '\n\n'
+    for name, row in zip(names, rows):
+        text += row_fmt.format(name, *row[:3], int(row[3]), width=width, digits=digits)
+    text += '\n'
+    text += ('{:>{width}s} ' + ' {:>9.{digits}}' * 2 + ' {:>9.{digits}f}' + ' {:>9}\n').format(
+        'accuracy', '', '', accuracy, int(total), width=width, digits=digits)
+    for name, row in (('macro avg', macro), ('weighted avg', weighted)):
+        text += row_fmt.format(name, *row[:3], int(row[3]), width=width, digits=digits)
+    return text, report

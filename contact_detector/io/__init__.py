@@ -1,25 +1,7 @@
-"""Input/output: rosbag2 helpers shared by every tool (rosbags only, no ROS install needed)."""
+"""Input/output at the edges: message adapters, CDR readers, rosbag2 helpers.
 
-from contact_detector.io.bags import (
-    BagMessage,
-    find_bags,
-    iter_messages,
-    manifest_entry,
-    open_reader,
-    read_audio,
-    read_manifest,
-    read_truth,
-    read_wrench,
-)
-
-__all__ = [
-    'BagMessage',
-    'find_bags',
-    'iter_messages',
-    'manifest_entry',
-    'open_reader',
-    'read_audio',
-    'read_manifest',
-    'read_truth',
-    'read_wrench',
-]
+The submodules are imported on their own (``from contact_detector.io.bags import find_bags``),
+so that the node, which needs :mod:`~contact_detector.io.messages` and
+:mod:`~contact_detector.io.cdr` only, does not import rosbags (:mod:`~contact_detector.io.bags`,
+for the offline tools).
+"""

@@ -1,4 +1,4 @@
-"""The model layer: model bundles (save/load with checks) and the compiled forest."""
+"""The model layer: bundles (save/load with checks), forest arrays, the compiled forest."""
 
 from contact_detector.model.bundle import (
     DecisionRule,
@@ -9,10 +9,12 @@ from contact_detector.model.bundle import (
     save_bundle,
 )
 from contact_detector.model.compiled_forest import CompiledForest
+from contact_detector.model.forest_arrays import ForestArrays
 
 __all__ = [
     'CompiledForest',
     'DecisionRule',
+    'ForestArrays',
     'ModelBundle',
     'default_model_path',
     'load_bundle',

@@ -1,17 +1,21 @@
 """The model bundle: a trained forest plus everything needed to use it correctly.
 
-A bundle is saved as two or three files side by side::
+A bundle is saved as three files side by side::
 
-    contact_forest.joblib      the model file (joblib pickle, or ``.skops``)
+    contact_forest.npz         the model file: the trees as plain arrays (or legacy
+                               ``.joblib`` / ``.skops``)
     contact_forest.card.json   the model card: all metadata + SHA-256 of the model file
     contact_forest.card.md     the same card rendered for humans
 
-The model file holds ``{'payload_version': 1, 'forest': <RandomForestClassifier>,
-'metadata': {...}}`` where ``metadata`` is plain JSON (feature config, feature names, schema
+The ``.npz`` file (:mod:`contact_detector.model.forest_arrays`) holds the trees as numpy
+arrays and the metadata as JSON; it is read with ``np.load(..., allow_pickle=False)``, so
+loading it needs neither scikit-learn nor pickle. The legacy formats hold ``{'payload_version':
+1, 'forest': <RandomForestClassifier>, 'metadata': {...}}`` and are read through scikit-learn
+(imported only then). ``metadata`` is plain JSON (feature config, feature names, schema
 version, label window, decision rule, versions, training summary, metrics, creation time).
-The card repeats ``metadata`` and adds the hash, so :func:`load_bundle` can check a joblib
-file **before** unpickling it (unpickling runs code) and can refuse an incompatible model
-without touching it. See ``docs/model.md``.
+The card repeats ``metadata`` and adds the hash, so :func:`load_bundle` checks a file
+**before** parsing it and refuses an incompatible model without touching it. See
+``docs/model.md``.
 """
 
 import dataclasses
@@ -19,6 +23,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 import functools
 import hashlib
+import importlib.metadata
 import json
 import math
 import os
@@ -30,23 +35,24 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 import warnings
 import zipfile
 
-import joblib
 import numpy as np
-import sklearn
-from sklearn.ensemble import RandomForestClassifier
 
 import contact_detector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
-from contact_detector.model.compiled_forest import (CompiledForest, DEFAULT_CODEGEN_DEPTH,
-                                                    forest_content_sha256)
+from contact_detector.model.compiled_forest import CompiledForest, DEFAULT_CODEGEN_DEPTH
+from contact_detector.model.forest_arrays import boundary_frames, ForestArrays
 
 #: Version of the payload dict inside model files and of the card layout.
 PAYLOAD_VERSION = 1
 CARD_VERSION = 1
 #: File name of the shipped model (in ``<share>/contact_detector/models/``).
-DEFAULT_MODEL_NAME = 'contact_forest.joblib'
-FORMATS = {'.joblib': 'joblib', '.skops': 'skops'}
+DEFAULT_MODEL_NAME = 'contact_forest.npz'
+FORMATS = {'.npz': 'npz', '.joblib': 'joblib', '.skops': 'skops'}
+#: Formats whose forest is a pickled/serialised scikit-learn object (loaded through sklearn).
+SKLEARN_FORMATS = ('joblib', 'skops')
+#: Rows of the training frames on which save_bundle also checks the single-frame path.
+SAVE_CHECK_SINGLE_ROWS = 2000
 #: Pickle protocol of joblib files, fixed so that the same forest gives the same bytes.
 JOBLIB_PROTOCOL = 4
 #: zlib level of joblib files: ~4x smaller than raw for deep trees, deterministic.
@@ -168,10 +174,31 @@ class DecisionRule:
 
 # ---------------------------------------------------------------------------- helpers
 
+def _sklearn_version() -> str:
+    """Installed scikit-learn version (without importing it), or ``'not installed'``."""
+    try:
+        return importlib.metadata.version('scikit-learn')
+    except importlib.metadata.PackageNotFoundError:
+        return 'not installed'
+
+
+def _import_sklearn() -> Any:
+    """Import scikit-learn for the legacy formats, or say how to get it."""
+    try:
+        import sklearn
+        import sklearn.ensemble  # noqa: F401
+    except ImportError as err:
+        raise ModelError('this model format holds a scikit-learn object and needs scikit-learn '
+                         '(pip install "contact_detector[train]"); or convert the model once '
+                         'with `contact-detector convert-model OLD NEW.npz` where scikit-learn '
+                         'is installed') from err
+    return sklearn
+
+
 def runtime_versions() -> Dict[str, str]:
     """Versions recorded in a new bundle: contact_detector, scikit-learn, numpy, python."""
     return {'contact_detector': contact_detector.__version__,
-            'scikit-learn': sklearn.__version__,
+            'scikit-learn': _sklearn_version(),
             'numpy': np.__version__,
             'python': platform.python_version()}
 
@@ -220,6 +247,15 @@ def card_paths(path: Path) -> tuple:
 
 def _forest_problem(forest: Any, n_features: int) -> Optional[str]:
     """Describe what is wrong with ``forest`` as the bundle's classifier, or None."""
+    if isinstance(forest, ForestArrays):
+        if forest.n_features != n_features:
+            return (f'the forest expects {forest.n_features} features but the bundle names '
+                    f'{n_features}')
+        return None
+    if 'sklearn' not in sys.modules:  # not a scikit-learn object either
+        return (f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier '
+                'or ForestArrays')
+    from sklearn.ensemble import RandomForestClassifier
     if not isinstance(forest, RandomForestClassifier):
         return f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier'
     if not getattr(forest, 'estimators_', None):
@@ -242,8 +278,10 @@ class ModelBundle:
 
     Attributes
     ----------
-    forest : sklearn.ensemble.RandomForestClassifier
-        Fitted, classes ``[0, 1]`` (1 = contact), ``n_features_in_ == len(feature_names)``.
+    forest : ForestArrays or sklearn.ensemble.RandomForestClassifier
+        The trees as arrays (npz models), or a fitted scikit-learn forest (training, legacy
+        models) with classes ``[0, 1]`` (1 = contact); ``len(feature_names)`` inputs.
+        :attr:`trees` gives the arrays in both cases.
     feature_config : FeatureConfig
         The feature configuration the training data was computed with.
     feature_names : tuple of str
@@ -312,15 +350,27 @@ class ModelBundle:
         if problem:
             raise ModelError(f'invalid ModelBundle: {problem}')
 
+    @functools.cached_property
+    def trees(self) -> ForestArrays:
+        """The forest as :class:`ForestArrays` (converted once from a scikit-learn forest)."""
+        if isinstance(self.forest, ForestArrays):
+            return self.forest
+        return ForestArrays.from_sklearn(self.forest)
+
+    @property
+    def sklearn_forest(self) -> Any:
+        """The scikit-learn forest, or None for a bundle loaded from an npz file."""
+        return None if isinstance(self.forest, ForestArrays) else self.forest
+
     @property
     def n_estimators(self) -> int:
         """Number of trees."""
-        return len(self.forest.estimators_)
+        return self.trees.n_trees
 
-    @functools.cached_property
+    @property
     def forest_sha256(self) -> str:
         """SHA-256 of the trees' structure and leaf values, independent of the file format."""
-        return forest_content_sha256(self.forest)
+        return self.trees.content_sha256
 
     @property
     def model_id(self) -> str:
@@ -328,8 +378,8 @@ class ModelBundle:
         Short identifier for logs and diagnostics: ``rf<trees>-<feature set>-<hash>``.
 
         E.g. ``rf8-paper7-3fa2c1d09b``, or ``rf8-paper7+force_delta-...`` with extra features.
-        The hash is :attr:`forest_sha256`, so the joblib and skops files of one forest share
-        the id.
+        The hash is :attr:`forest_sha256`, so the npz, joblib and skops files of one forest
+        share the id.
         """
         feature_set = '+'.join(('paper7',) + tuple(self.feature_config.extra_features))
         return f'rf{self.n_estimators}-{feature_set}-{self.forest_sha256[:10]}'
@@ -351,27 +401,20 @@ class ModelBundle:
     def feature_importances(self) -> Dict[str, float]:
         """Mean decrease in impurity per feature name (sums to 1), as in the paper's Fig. 7."""
         return {name: float(value)
-                for name, value in zip(self.feature_names, self.forest.feature_importances_)}
+                for name, value in zip(self.feature_names, self.trees.feature_importances)}
 
     def compile(self, *, codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> CompiledForest:
         """Return a :class:`CompiledForest` of the forest (about 1.5 s for 8 x 20k nodes)."""
-        return CompiledForest.from_sklearn(self.forest, codegen_depth=codegen_depth)
+        return CompiledForest.from_arrays(self.trees, codegen_depth=codegen_depth)
 
 
 # ---------------------------------------------------------------------------- the card
 
-def _forest_summary(forest: RandomForestClassifier) -> dict:
-    params = {}
-    for name, value in sorted(forest.get_params().items()):
-        if name == 'estimator' or '__' in name:
-            continue
-        params[name] = value if value is None or isinstance(value, (bool, int, float, str)) \
-            else repr(value)
-    trees = [estimator.tree_ for estimator in forest.estimators_]
-    return {'params': params,
-            'tree_node_counts': [int(tree.node_count) for tree in trees],
-            'tree_max_depths': [int(tree.max_depth) for tree in trees],
-            'tree_leaf_counts': [int(tree.n_leaves) for tree in trees]}
+def _forest_summary(trees: ForestArrays) -> dict:
+    return {'params': dict(trees.params),
+            'tree_node_counts': trees.tree_node_counts(),
+            'tree_max_depths': trees.tree_max_depths(),
+            'tree_leaf_counts': trees.tree_leaf_counts()}
 
 
 def build_card(*, bundle: ModelBundle, model_path: Path, fmt: str) -> dict:
@@ -396,7 +439,7 @@ def build_card(*, bundle: ModelBundle, model_path: Path, fmt: str) -> dict:
             'forest_sha256': bundle.forest_sha256,
             'n_estimators': bundle.n_estimators,
             'feature_importances': bundle.feature_importances(),
-            'forest': _forest_summary(bundle.forest)}
+            'forest': _forest_summary(bundle.trees)}
     card.update(bundle.metadata())
     return _plain(card, 'card')
 
@@ -415,6 +458,20 @@ def _md_table(rows: Mapping[str, Any], header: tuple = ('key', 'value')) -> list
     return lines + ['']
 
 
+_LOAD_CHECKS = {
+    'npz': ('Loading needs numpy only (no scikit-learn, no pickle): it checks the SHA-256 above, '
+            'the feature schema version, the feature names and configuration, then every '
+            'array of the file (dtypes, shapes, child and feature indices, tree structure, '
+            'finite thresholds, class fractions) and the forest content hash '
+            '(see docs/model.md).'),
+    'joblib': ('Loading checks the SHA-256 above before unpickling, then the feature schema '
+               'version, the feature names and configuration, and the scikit-learn version '
+               '(see docs/model.md). Convert it to the npz format with `contact-detector '
+               'convert-model`.'),
+}
+_LOAD_CHECKS['skops'] = _LOAD_CHECKS['joblib']
+
+
 def render_card_markdown(card: Mapping[str, Any]) -> str:
     """Render a card dict (see :func:`build_card`) as Markdown."""
     importances = sorted(card['feature_importances'].items(), key=lambda kv: -kv[1])
@@ -427,9 +484,7 @@ def render_card_markdown(card: Mapping[str, Any]) -> str:
              f'- Trees: {card["n_estimators"]}, nodes per tree {forest["tree_node_counts"]}, '
              f'depths {forest["tree_max_depths"]}',
              f'- Feature schema version: {card["feature_schema_version"]}', '',
-             'Loading checks the SHA-256 above before unpickling, then the feature schema '
-             'version, the feature names and configuration, and the scikit-learn version '
-             '(see docs/model.md).', '',
+             _LOAD_CHECKS.get(card['format'], _LOAD_CHECKS['joblib']), '',
              '## Features and importances', '',
              '| feature | importance |', '|---|---|']
     lines += [f'| {name} | {value:.4f} |' for name, value in importances]
@@ -459,7 +514,8 @@ def _replace_atomically(*, data_writer: Any, path: Path) -> None:
             tmp.unlink()
 
 
-def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path:
+def save_bundle(*, bundle: ModelBundle, path: Path, fmt: Optional[str] = None,
+                check_frames: Optional[np.ndarray] = None) -> Path:
     """
     Save ``bundle`` as a model file plus its card (``.card.json`` and ``.card.md``).
 
@@ -468,11 +524,16 @@ def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path
     bundle : ModelBundle
         The bundle to save.
     path : Path
-        Model file path; its suffix must match ``fmt`` (``.joblib`` or ``.skops``). Parent
-        directories are created.
-    fmt : str
-        ``'joblib'`` (pickle protocol 4, zlib level 3: the same forest gives the same bytes)
-        or ``'skops'`` (no code runs on load; see docs/model.md).
+        Model file path; its suffix names the format (``.npz``, ``.joblib`` or ``.skops``).
+        Parent directories are created.
+    fmt : str, optional
+        ``'npz'`` (arrays, loads with numpy alone; see :mod:`~contact_detector.model.
+        forest_arrays`), ``'joblib'`` (pickle protocol 4, zlib level 3) or ``'skops'``;
+        None = from the suffix. All three give the same bytes for the same bundle.
+    check_frames : np.ndarray, shape (n_frames, n_features), optional
+        npz only: frames (e.g. the training frames) on which the written file's forest must
+        give ``forest.predict_proba(x)[:, 1]`` of the bundle's scikit-learn forest bit for
+        bit, besides :func:`~contact_detector.model.forest_arrays.boundary_frames`.
 
     Returns
     -------
@@ -484,10 +545,17 @@ def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path
     ConfigError
         Unknown ``fmt`` or a suffix that does not match it.
     ModelError
-        The bundle cannot be written.
+        The bundle cannot be written; or, for npz, the file read back is not the same forest
+        (content hash, metadata, or probabilities differing from scikit-learn's in any bit).
+        Nothing is written then.
 
     """
     path = Path(path)
+    if fmt is None:
+        fmt = FORMATS.get(path.suffix)
+        if fmt is None:
+            raise ConfigError(f'a model file must end in one of {sorted(FORMATS)}, got '
+                              f'{path.name!r}')
     if fmt not in FORMATS.values():
         raise ConfigError(f'unknown model format {fmt!r}; use one of {sorted(FORMATS.values())}')
     if FORMATS.get(path.suffix) != fmt:
@@ -500,16 +568,23 @@ def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path
     if clash:
         raise ConfigError(f'{clash[0]} already sits beside {path.name} and owns the card '
                           f'{card_json.name}; save the {fmt} file under another name')
-    payload = {'payload_version': PAYLOAD_VERSION, 'forest': bundle.forest,
-               'metadata': bundle.metadata()}
-    if fmt == 'joblib':
+    if fmt == 'npz':
         def writer(tmp: Path) -> None:
-            joblib.dump(payload, tmp, compress=JOBLIB_COMPRESS, protocol=JOBLIB_PROTOCOL)
+            bundle.trees.write_npz(path=tmp, metadata=bundle.metadata())
+            _check_written_npz(bundle=bundle, path=tmp, check_frames=check_frames)
     else:
-        skops_io = _import_skops()
+        payload = {'payload_version': PAYLOAD_VERSION, 'forest': _sklearn_forest_of(bundle),
+                   'metadata': bundle.metadata()}
+        if fmt == 'joblib':
+            import joblib
 
-        def writer(tmp: Path) -> None:
-            skops_io.dump(payload, tmp, compression=zipfile.ZIP_DEFLATED, compresslevel=3)
+            def writer(tmp: Path) -> None:
+                joblib.dump(payload, tmp, compress=JOBLIB_COMPRESS, protocol=JOBLIB_PROTOCOL)
+        else:
+            skops_io = _import_skops()
+
+            def writer(tmp: Path) -> None:
+                skops_io.dump(payload, tmp, compression=zipfile.ZIP_DEFLATED, compresslevel=3)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         _replace_atomically(data_writer=writer, path=path)
@@ -524,9 +599,53 @@ def save_bundle(*, bundle: ModelBundle, path: Path, fmt: str = 'joblib') -> Path
     return path
 
 
+def _sklearn_forest_of(bundle: ModelBundle) -> Any:
+    """Return the scikit-learn forest the legacy formats store, or raise ModelError."""
+    if bundle.sklearn_forest is None:
+        raise ModelError('this bundle holds its forest as arrays (it was loaded from an npz '
+                         'file); it can only be saved as npz')
+    return bundle.sklearn_forest
+
+
+def _bits(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64).view(np.uint64)
+
+
+def _check_written_npz(*, bundle: ModelBundle, path: Path,
+                       check_frames: Optional[np.ndarray]) -> None:
+    """Read ``path`` back and compare it with the bundle; raise ModelError on any difference."""
+    loaded, meta = ForestArrays.read_npz(path=path)
+    if loaded.content_sha256 != bundle.forest_sha256 or meta != bundle.metadata():
+        raise ModelError('the npz file read back differs from the bundle (trees or metadata); '
+                         'it was not saved')
+    forest = bundle.sklearn_forest
+    if forest is None:
+        return  # the bundle's forest already is these arrays (content hash compared above)
+    compiled = CompiledForest.from_arrays(loaded)
+    frames = [boundary_frames(loaded)]
+    if check_frames is not None:
+        frames.append(np.asarray(check_frames))
+    for x in frames:
+        if x.ndim != 2 or x.shape[1] != loaded.n_features:
+            raise ModelError(f'check_frames must have shape (n, {loaded.n_features}), got '
+                             f'{x.shape}')
+        expected = forest.predict_proba(x)[:, 1]
+        single = x[np.linspace(0, len(x) - 1, min(len(x), SAVE_CHECK_SINGLE_ROWS)).astype(int)] \
+            if len(x) else x
+        one = np.array([compiled.predict_one(row) for row in single], dtype=np.float64)
+        expected_one = forest.predict_proba(single)[:, 1] if len(single) else one
+        if not (np.array_equal(_bits(compiled.predict_proba(x)), _bits(expected))
+                and np.array_equal(_bits(one), _bits(expected_one))):
+            raise ModelError(f"the npz forest's probabilities differ from scikit-learn "
+                             f'{_sklearn_version()} predict_proba on {len(x)} frames; the model '
+                             'was not saved (is this forest from scikit-learn >= 1.4?)')
+
+
 def _check_metadata(*, meta: Mapping[str, Any], source: str,
-                    expected_config: Optional[FeatureConfig]) -> FeatureConfig:
+                    expected_config: Optional[FeatureConfig], fmt: str) -> FeatureConfig:
     """Check a card's or payload's metadata against the running code; return its config."""
+    if not isinstance(meta, Mapping):
+        raise ModelError(f'{source}: the metadata is not a JSON object; {_RETRAIN}')
     missing = [key for key in _METADATA_KEYS if key not in meta]
     if missing:
         raise ModelError(f'{source} lacks {missing}; it was not written by save_bundle; '
@@ -536,16 +655,22 @@ def _check_metadata(*, meta: Mapping[str, Any], source: str,
         raise ModelError(f'{source} was trained on feature schema version {schema}, but this '
                          f'contact_detector computes schema version {FEATURE_SCHEMA_VERSION} '
                          f'(the features changed meaning); {_RETRAIN}')
-    saved = str(meta['versions'].get('scikit-learn', 'unknown'))
-    if _major_minor(saved) != _major_minor(sklearn.__version__):
-        raise ModelError(f'{source} was saved with scikit-learn {saved} but scikit-learn '
-                         f'{sklearn.__version__} is installed; forests are only loaded by the '
-                         f'same major.minor version. Either {_RETRAIN} under scikit-learn '
-                         f'{sklearn.__version__}, or install scikit-learn '
-                         f'{_major_minor(saved)}.x')
+    if not isinstance(meta['versions'], Mapping) or not isinstance(meta['feature_names'], list):
+        raise ModelError(f'{source}: versions must be an object and feature_names a list; '
+                         f'{_RETRAIN}')
+    if fmt in SKLEARN_FORMATS:
+        # A pickled forest is only read by the scikit-learn that wrote it; npz has no such tie.
+        saved = str(meta['versions'].get('scikit-learn', 'unknown'))
+        installed = _sklearn_version()
+        if _major_minor(saved) != _major_minor(installed):
+            raise ModelError(f'{source} was saved with scikit-learn {saved} but scikit-learn '
+                             f'{installed} is installed; {fmt} forests are only loaded by the '
+                             f'same major.minor version. Convert it once with `contact-detector '
+                             f'convert-model` under scikit-learn {_major_minor(saved)}.x (the '
+                             f'npz format needs no scikit-learn), or {_RETRAIN}')
     try:
         config = FeatureConfig.from_dict(meta['feature_config'])
-    except ConfigError as err:
+    except (ConfigError, TypeError, ValueError, AttributeError) as err:
         raise ModelError(f'{source} has a feature configuration this contact_detector cannot '
                          f'use ({err}); {_RETRAIN}') from err
     names = tuple(meta['feature_names'])
@@ -591,13 +716,15 @@ def _import_skops() -> Any:
 
 
 def _read_payload(*, path: Path, fmt: str, trusted_skops_types: Sequence[str]) -> Any:
-    """Deserialise a (hash-checked) model file; wrap every failure in ModelError."""
+    """Deserialise a (hash-checked) legacy model file; wrap every failure in ModelError."""
+    _import_sklearn()
     from sklearn.exceptions import InconsistentVersionWarning
     skops_io = _import_skops() if fmt == 'skops' else None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter('error', InconsistentVersionWarning)
             if fmt == 'joblib':
+                import joblib
                 return joblib.load(path)
             allowed = SKOPS_ALLOWED_TYPES | set(trusted_skops_types)
             untrusted = set(skops_io.get_untrusted_types(file=path))
@@ -624,24 +751,31 @@ def load_bundle(*, path: Path, expected_config: Optional[FeatureConfig] = None,
     """
     Load a model file saved by :func:`save_bundle`, refusing anything that does not fit.
 
-    Order of checks (each failure is a :class:`ModelError` saying what to do):
+    Order of checks (each failure is a :class:`ModelError` saying what to do; no other
+    exception escapes):
 
     1. the model file and its ``<stem>.card.json`` exist; the suffix names the format;
     2. the file's SHA-256 equals the card's (skipped if ``verify_hash`` is False), *before*
-       the file is deserialised, since unpickling a joblib file runs code;
-    3. from the card, still before deserialising: feature schema version equals
+       the file is parsed (unpickling a joblib file runs code);
+    3. from the card, still before parsing: feature schema version equals
        :data:`FEATURE_SCHEMA_VERSION`, feature names equal the card's
        ``feature_config.feature_names``, the config equals ``expected_config`` (differing
-       fields named), scikit-learn major.minor equals the running one;
-    4. skops only: every type in the file is in :data:`SKOPS_ALLOWED_TYPES` or
+       fields named); for joblib/skops only, scikit-learn major.minor equals the running one;
+    4. npz: the zip holds exactly the layout's members with their dtypes and dimensions and
+       sizes matching their headers, read by ``np.load(allow_pickle=False)``; the arrays form
+       valid trees (:class:`~contact_detector.model.forest_arrays.ForestArrays`); the content
+       hash equals the card's ``forest_sha256``.
+       skops: every type in the file is in :data:`SKOPS_ALLOWED_TYPES` or
        ``trusted_skops_types``;
-    5. the file's own metadata equals the card's; the forest is a fitted
-       ``RandomForestClassifier`` with classes ``[0, 1]`` and ``len(feature_names)`` inputs.
+    5. the file's own metadata equals the card's; the forest has ``len(feature_names)``
+       inputs (a fitted ``RandomForestClassifier`` with classes ``[0, 1]`` for joblib/skops).
+
+    Only joblib and skops import scikit-learn (and joblib/skops); npz needs numpy alone.
 
     Parameters
     ----------
     path : Path
-        ``.joblib`` or ``.skops`` model file.
+        ``.npz``, ``.joblib`` or ``.skops`` model file.
     expected_config : FeatureConfig, optional
         The configuration the caller will compute features with.
     verify_hash : bool
@@ -656,9 +790,22 @@ def load_bundle(*, path: Path, expected_config: Optional[FeatureConfig] = None,
 
     """
     path = Path(path)
+    try:
+        return _load_bundle(path=path, expected_config=expected_config, verify_hash=verify_hash,
+                            trusted_skops_types=trusted_skops_types)
+    except ModelError:
+        raise
+    except Exception as err:  # a malformed card or file: never anything but ModelError
+        raise ModelError(f'model {path} cannot be loaded: {type(err).__name__}: {err}; '
+                         f'the file or its card is corrupt; {_RETRAIN}') from err
+
+
+def _load_bundle(*, path: Path, expected_config: Optional[FeatureConfig], verify_hash: bool,
+                 trusted_skops_types: Sequence[str]) -> ModelBundle:
+    """:func:`load_bundle` without the final wrapping of unexpected errors."""
     fmt = FORMATS.get(path.suffix)
     if fmt is None:
-        raise ModelError(f'model file {path} must end in .joblib or .skops')
+        raise ModelError(f'model file {path} must end in .npz, .joblib or .skops')
     if not path.is_file():
         raise ModelError(f'model file {path} does not exist; pass an existing model or '
                          f'{_RETRAIN}')
@@ -687,31 +834,40 @@ def load_bundle(*, path: Path, expected_config: Optional[FeatureConfig] = None,
                              'modified, and it was NOT loaded. Restore the file that goes with '
                              f'the card, or {_RETRAIN}')
     card_source = f'model {path.name} (per its card)'
-    config = _check_metadata(meta=card, source=card_source, expected_config=expected_config)
+    config = _check_metadata(meta=card, source=card_source, expected_config=expected_config,
+                             fmt=fmt)
 
-    payload = _read_payload(path=path, fmt=fmt, trusted_skops_types=trusted_skops_types)
-    if not isinstance(payload, dict) or payload.get('payload_version') != PAYLOAD_VERSION \
-            or not isinstance(payload.get('metadata'), dict) or 'forest' not in payload:
-        raise ModelError(f'model file {path} does not hold a version {PAYLOAD_VERSION} '
-                         f'contact_detector bundle; {_RETRAIN}')
-    meta = payload['metadata']
+    if fmt == 'npz':
+        forest, meta = ForestArrays.read_npz(path=path)
+        if forest.content_sha256 != card.get('forest_sha256'):
+            raise ModelError(f'model file {path}: its trees have content hash '
+                             f'{forest.content_sha256}, the card says '
+                             f'{card.get("forest_sha256")}; re-save the bundle to regenerate '
+                             'the card')
+    else:
+        payload = _read_payload(path=path, fmt=fmt, trusted_skops_types=trusted_skops_types)
+        if not isinstance(payload, dict) or payload.get('payload_version') != PAYLOAD_VERSION \
+                or not isinstance(payload.get('metadata'), dict) or 'forest' not in payload:
+            raise ModelError(f'model file {path} does not hold a version {PAYLOAD_VERSION} '
+                             f'contact_detector bundle; {_RETRAIN}')
+        forest, meta = payload['forest'], payload['metadata']
     differing = [key for key in _METADATA_KEYS if meta.get(key) != card.get(key)]
     if differing:
         raise ModelError(f'model card {card_json} disagrees with model file {path.name} in '
                          f'{differing}; the card must be the one save_bundle wrote with this '
                          'file. Re-save the bundle to regenerate the card')
-    problem = _forest_problem(payload['forest'], len(config.feature_names))
+    problem = _forest_problem(forest, len(config.feature_names))
     if problem:
         raise ModelError(f'model file {path}: {problem}; {_RETRAIN}')
     try:
-        return ModelBundle(forest=payload['forest'], feature_config=config,
+        return ModelBundle(forest=forest, feature_config=config,
                            feature_names=tuple(meta['feature_names']),
                            feature_schema_version=meta['feature_schema_version'],
                            label_window=meta['label_window'],
                            decision_rule=DecisionRule.from_dict(meta['decision_rule']),
                            versions=meta['versions'], training=meta['training'],
                            metrics=meta['metrics'], created=meta['created'])
-    except ConfigError as err:
+    except (ConfigError, TypeError) as err:
         raise ModelError(f'model file {path} has invalid metadata: {err}; {_RETRAIN}') from err
 
 
@@ -755,7 +911,7 @@ def find_model(*, name: str = DEFAULT_MODEL_NAME, dirs: Sequence[Path]) -> Path:
 
 def default_model_path() -> Path:
     """
-    Path of the shipped model ``models/contact_forest.joblib``.
+    Path of the shipped model ``models/contact_forest.npz``.
 
     Searched in the ament share directory of ``contact_detector`` (if ament_index_python is
     importable and the package is installed), then ``<sys.prefix>/share/contact_detector/

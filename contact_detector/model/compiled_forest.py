@@ -42,6 +42,7 @@ from typing import Any, Callable, List, Sequence, Tuple
 import numpy as np
 
 from contact_detector.errors import InputError, ModelError
+from contact_detector.model.forest_arrays import ForestArrays, update_tree_digest
 
 #: Levels of each tree compiled to Python code. Python's tokenizer refuses more than 100 levels
 #: of indentation, hence the cap. Compiling costs about 8 us per node (~1.5 s for 8 trees of
@@ -71,13 +72,14 @@ def forest_content_sha256(forest: Any) -> str:
     Independent of the file format and of pickling details, so it identifies what the forest
     computes (two forests with equal hashes give equal predictions).
     """
+    if isinstance(forest, ForestArrays):
+        return forest.content_sha256
     digest = hashlib.sha256()
     for estimator in forest.estimators_:
         tree = estimator.tree_
-        for array, dtype in ((tree.children_left, '<i8'), (tree.children_right, '<i8'),
-                             (tree.feature, '<i8'), (tree.threshold, '<f8'),
-                             (tree.value, '<f8')):
-            digest.update(np.ascontiguousarray(array, dtype=dtype).tobytes())
+        update_tree_digest(digest, children_left=tree.children_left,
+                           children_right=tree.children_right, feature=tree.feature,
+                           threshold=tree.threshold, value=tree.value)
     return digest.hexdigest()
 
 
@@ -218,56 +220,31 @@ class CompiledForest:
             If ``forest`` is not such a forest.
 
         """
-        estimators = getattr(forest, 'estimators_', None)
-        classes = getattr(forest, 'classes_', None)
-        if not estimators or classes is None:
-            raise ModelError(f'expected a fitted RandomForestClassifier, got {type(forest)!r}')
-        if getattr(forest, 'n_outputs_', 1) != 1 or np.asarray(classes).tolist() != [0, 1]:
-            raise ModelError('the forest must be a single-output binary classifier with classes '
-                             f'[0, 1] (1 = contact), got classes {np.asarray(classes).tolist()}')
-        key = (forest_content_sha256(forest), int(forest.n_features_in_), codegen_depth)
+        return cls.from_arrays(ForestArrays.from_sklearn(forest), codegen_depth=codegen_depth)
+
+    @classmethod
+    def from_arrays(cls, forest: ForestArrays, *,
+                    codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> 'CompiledForest':
+        """
+        Compile a :class:`ForestArrays` (the npz model format; no scikit-learn involved).
+
+        Shares :meth:`from_sklearn`'s cache: a forest and its arrays have the same content hash
+        and give the same (bit-identical) instance.
+        """
+        if not isinstance(forest, ForestArrays):
+            raise ModelError(f'expected ForestArrays, got {type(forest).__name__}')
+        key = (forest.content_sha256, forest.n_features, codegen_depth)
         with _cache_lock:
             if key in _cache:
                 _cache.move_to_end(key)
                 return _cache[key]
-        compiled = cls._build(forest, codegen_depth=codegen_depth)
+        compiled = cls(**forest.flat(), n_features=forest.n_features,
+                       codegen_depth=codegen_depth)
         with _cache_lock:
             _cache[key] = compiled
             while len(_cache) > _CACHE_SIZE:
                 _cache.popitem(last=False)
         return compiled
-
-    @classmethod
-    def _build(cls, forest: Any, *, codegen_depth: int) -> 'CompiledForest':
-        """Flatten a checked forest (no cache); see :meth:`from_sklearn`."""
-        estimators = forest.estimators_
-        parts = {name: [] for name in ('feature', 'threshold', 'left', 'right', 'p_contact')}
-        roots = []
-        offset = 0
-        for estimator in estimators:
-            tree = estimator.tree_
-            if tree.value.shape[1:] != (1, 2):
-                raise ModelError(f'unexpected tree value shape {tree.value.shape}; expected '
-                                 '(n_nodes, 1, 2) for a binary classifier')
-            if not np.allclose(tree.value.sum(axis=2), 1.0, rtol=0.0, atol=1e-9):
-                # scikit-learn < 1.4 stored weighted counts and normalised in predict_proba.
-                raise ModelError('tree values are not class fractions; forests from '
-                                 'scikit-learn < 1.4 are not supported, retrain with '
-                                 '`contact-detector train`')
-            left = tree.children_left.astype(np.intp)
-            right = tree.children_right.astype(np.intp)
-            leaf = left < 0
-            roots.append(offset)
-            parts['feature'].append(tree.feature.astype(np.intp))
-            parts['threshold'].append(tree.threshold.astype(np.float64))
-            parts['left'].append(np.where(leaf, -1, left + offset))
-            parts['right'].append(np.where(leaf, -1, right + offset))
-            # sklearn >= 1.4 stores class fractions in value: no normalisation left to do.
-            parts['p_contact'].append(tree.value[:, 0, 1].astype(np.float64))
-            offset += tree.node_count
-        return cls(**{name: np.concatenate(chunks) for name, chunks in parts.items()},
-                   roots=np.asarray(roots, dtype=np.intp),
-                   n_features=int(forest.n_features_in_), codegen_depth=codegen_depth)
 
     # ------------------------------------------------------------------ build helpers
 

@@ -20,6 +20,7 @@ from contact_detector.evaluation.metrics import (frame_labels, score_trial, summ
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.training import LabelWindow
 
 
@@ -96,12 +97,24 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     return forest.fit(x, y)
 
 
-def score_rules(*, forest: RandomForestClassifier, frames: Sequence[TrialFrames],
+def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:
+    """P(contact) per row from a scikit-learn forest or a CompiledForest (bit-identical)."""
+    if isinstance(forest, CompiledForest):
+        return forest.predict_proba(x)
+    return forest.predict_proba(x)[:, 1]
+
+
+def score_rules(*, forest: object, frames: Sequence[TrialFrames],
                 setting: FeatureSetting, rules: Sequence[DecisionRule],
                 warmup_s: float = 0.5) -> List[SweepRow]:
-    """Score every rule on held-out trials with one trained forest."""
+    """
+    Score every rule on held-out trials with one trained forest.
+
+    ``forest`` is a fitted ``RandomForestClassifier`` or a :class:`CompiledForest` (e.g.
+    ``bundle.compile()`` of an npz model); both give the same probabilities.
+    """
     cols = _columns(setting)
-    probs = [forest.predict_proba(f.x[:, cols])[:, 1] if f.x.shape[0] else np.zeros(0)
+    probs = [_p_contact(forest, f.x[:, cols]) if f.x.shape[0] else np.zeros(0)
              for f in frames]
     labels = [frame_labels(t=f.t, onsets=[f.truth.onset_t], start_s=setting.label.start_s,
                            end_s=setting.label.end_s) for f in frames]

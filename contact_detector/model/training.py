@@ -10,13 +10,9 @@ report that split and a split by *trial*, and quote the trial split.
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Any, Callable, Dict, List, Optional, Sequence
 
 import numpy as np
-from sklearn.ensemble import RandomForestClassifier
-from sklearn.metrics import (accuracy_score, classification_report, confusion_matrix,
-                             roc_auc_score)
-from sklearn.model_selection import (StratifiedGroupKFold, StratifiedKFold, train_test_split)
 
 from contact_detector.detection.offline import run_features
 from contact_detector.errors import BagError
@@ -132,7 +128,9 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def _forest(n: int, seed: int, jobs: int) -> RandomForestClassifier:
+def _forest(n: int, seed: int, jobs: int) -> Any:
+    # scikit-learn is imported by training only (the detector runs on numpy arrays).
+    from sklearn.ensemble import RandomForestClassifier
     return RandomForestClassifier(n_estimators=n, max_features='sqrt', random_state=seed,
                                   n_jobs=jobs)
 
@@ -152,7 +150,7 @@ class SplitResult:
     test_auc: float
     y_test: np.ndarray = field(repr=False, default=None)
     p_test: np.ndarray = field(repr=False, default=None)
-    forest: RandomForestClassifier = field(repr=False, default=None)
+    forest: Any = field(repr=False, default=None)
     test_trials: List[str] = field(default_factory=list)
 
 
@@ -166,6 +164,7 @@ def split_indices(*, kind: str, y: np.ndarray, groups: np.ndarray,
     """
     idx = np.arange(y.size)
     if kind == 'sample':
+        from sklearn.model_selection import train_test_split
         rest, test = train_test_split(idx, test_size=SPLIT[2], stratify=y, random_state=seed)
         train, val = train_test_split(rest, test_size=SPLIT[1] / (SPLIT[0] + SPLIT[1]),
                                       stratify=y[rest], random_state=seed)
@@ -209,6 +208,10 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     SplitResult
 
     """
+    from sklearn.metrics import (accuracy_score, classification_report, confusion_matrix,
+                                 roc_auc_score)
+    from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
+
     if np.unique(y).size < 2:
         raise BagError('the labelled frames contain only one class: check the truth topic or '
                        'the label window')

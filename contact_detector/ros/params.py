@@ -75,8 +75,8 @@ class ParamSpec:
 
 #: Every parameter of the node, in the order of params/contact_detector.yaml.
 PARAMS: Sequence[ParamSpec] = (
-    ParamSpec('model.path', '', 'Model file (.joblib or .skops, with its .card.json beside it); '
-              'empty = the shipped models/contact_forest.joblib.'),
+    ParamSpec('model.path', '', 'Model file (.npz; legacy .joblib or .skops need scikit-learn), '
+              'with its .card.json beside it; empty = the shipped models/contact_forest.npz.'),
     ParamSpec('audio.msg_type', 'std_msgs/msg/Int16MultiArray',
               'Message type of the audio topic.', choices=tuple(AUDIO_MSG_TYPES)),
     ParamSpec('audio.sample_rate', 16000.0,

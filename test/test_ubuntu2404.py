@@ -1,0 +1,95 @@
+"""The node on Ubuntu 24.04's library versions: the shipped model, a live trial, one release.
+
+``tools/ubuntu2404_env.sh`` (run by ``tools/test.sh`` before pytest) makes ``.venv-noble`` with
+exactly the apt versions of a stock Ubuntu 24.04 ROS 2 Jazzy install (numpy 1.26.4, scipy
+1.11.4, scikit-learn 1.4.1.post1, joblib 1.3.2), rclpy from the ros-jazzy wheels, no rosbags,
+and contact_detector installed without dependencies. In that environment the node starts with
+its default parameters and the shipped model, a publisher plays a simulated trial live (from
+the simulator's arrays: no bag is written or read), and a listener records the outputs: the
+node releases once, just after the contact.
+"""
+
+import json
+import os
+from pathlib import Path
+import subprocess
+import time
+
+import pytest
+
+import node_support
+
+pytestmark = pytest.mark.rclpy
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+NOBLE_PYTHON = Path(os.environ.get('CONTACT_DETECTOR_NOBLE_VENV', REPO / '.venv-noble')) \
+    / 'bin' / 'python'
+NOBLE_VERSIONS = {'numpy': '1.26.4', 'scipy': '1.11.4', 'scikit-learn': '1.4.1.post1',
+                  'joblib': '1.3.2'}
+#: Largest accepted delay from the true onset to the release message, s.
+LATENCY_BUDGET_S = 0.3
+
+needs_noble = pytest.mark.skipif(not NOBLE_PYTHON.is_file(),
+                                 reason='no .venv-noble: run tools/ubuntu2404_env.sh '
+                                        '(tools/test.sh does)')
+
+
+def _noble(args, log: Path) -> subprocess.Popen:
+    return subprocess.Popen([str(NOBLE_PYTHON), *args], cwd=REPO, env=dict(os.environ),
+                            stdout=open(log, 'w'), stderr=subprocess.STDOUT)
+
+
+@needs_noble
+def test_the_environment_has_exactly_ubuntu_2404s_versions_and_no_rosbags() -> None:
+    code = '''
+import importlib.metadata as md, importlib.util, json, sys
+import contact_detector.ros.node  # noqa: F401
+print(json.dumps({'versions': {n: md.version(n) for n in %r},
+                  'rosbags': importlib.util.find_spec('rosbags') is not None,
+                  'imported': sorted(m for m in ('sklearn', 'joblib', 'rosbags', 'matplotlib')
+                                     if m in sys.modules)}))
+''' % (list(NOBLE_VERSIONS),)
+    done = subprocess.run([str(NOBLE_PYTHON), '-c', code], cwd=REPO, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout)
+    assert found == {'versions': NOBLE_VERSIONS, 'rosbags': False, 'imported': []}
+
+
+@needs_noble
+def test_node_detects_a_live_trial_with_the_shipped_model(tmp_path: Path) -> None:
+    pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
+                                   tmp_path / 'stop')
+    params = REPO / 'params' / 'contact_detector.yaml'
+    node = _noble(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file',
+                   str(params)], tmp_path / 'node.log')
+    ready = tmp_path / 'listener_ready'
+    listener = _noble([str(HERE / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
+                       '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
+                      tmp_path / 'listen.log')
+    publisher = _noble([str(HERE / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+                        '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
+    try:
+        publisher.wait(timeout=75)
+        time.sleep(0.5)
+        stop.touch()
+        listener.wait(timeout=15)
+    finally:
+        stop.touch()
+        for proc in (publisher, listener):
+            if proc.poll() is None:
+                proc.kill()
+        node_code = node_support.stop_process(node)
+    logs = {name: (tmp_path / f'{name}.log').read_text() for name in ('node', 'listen', 'pub')}
+    assert publisher.returncode == 0, logs['pub']
+    assert listener.returncode == 0, logs['listen']
+    assert node_code == 0, logs['node']
+    assert 'contact_forest' in logs['node'] and 'FATAL' not in logs['node'], logs['node']
+    pub = json.loads(pub_json.read_text())
+    got = json.loads(listen_json.read_text())
+    releases = [t for t, value in got['release'] if value]
+    assert len(releases) == 1, (releases, pub['onset_wall'], logs['node'])
+    delay = releases[0] - pub['onset_wall']
+    assert 0.0 < delay <= LATENCY_BUDGET_S, (delay, logs['node'])
+    assert len(got['contact']) > 100, len(got['contact'])
