@@ -556,9 +556,11 @@ def test_exogenous_events_in_the_air():
               if i.in_air and tr.phase_at(i.t) in ('accelerate', 'descend')]
     assert {i.kind for i in moving} >= {'touch', 'brush'}
     checked = set()
-    for index in range(6):
+    for index in range(8):
+        if len(checked) == 3:
+            break
         none = simulate_trial(seed=SEED, index=index, condition='exogenous', hits='none')
-        for kind in ('touch', 'brush', 'setdown'):
+        for kind in sorted({'touch', 'brush', 'setdown'} - checked):
             tr = simulate_trial(seed=SEED, index=index, condition='exogenous', hits=kind)
             details = [h for h in tr.params['derived']['hit_details'] if h['in_air']
                        and tr.phase_at(h['t']) in ('accelerate', 'descend')]
@@ -573,8 +575,10 @@ def test_exogenous_events_in_the_air():
                 i0 = int((h['t'] - tr.start_time) * tr.audio_rate)
                 seg = slice(i0, i0 + int(0.05 * tr.audio_rate))
                 assert np.abs(tr.audio[seg].astype(float) - none.audio[seg]).max() > 100
-            elif kind == 'brush' or h.get('on_object', False):
+            elif kind == 'brush' or h['on_object']:
                 assert df > 0.2  # the wrist feels the push or the friction
+            else:
+                continue  # a touch on the arm: look for one on the object
             checked.add(kind)
     assert checked == {'touch', 'brush', 'setdown'}
 
