@@ -32,7 +32,8 @@ class Truth:
     contact_end_t : float or None
         Lift-off, seconds, when known.
     impacts : tuple of (float, str, bool)
-        Exogenous impacts: time, kind ('hand' or 'table'), whether the object was in the air.
+        Exogenous impacts: time (start), kind ('hand', 'table', 'touch', 'brush', 'setdown'),
+        whether the object was in the air. Every kind is blamed the same way.
 
     """
 

@@ -295,7 +295,13 @@ _F_SPRING = {
     'stop_load_frac': Range(0.3, 3.0, log=True),
     **_FAMILY_STOP,
 }
-_SPRING = {'object_mass_kg': Range(0.3, 0.9)}
+_SPRING = {
+    'object_mass_kg': Range(0.3, 0.9),
+    'arm_stiffness_npm': Range(400.0, 2500.0, log=True),
+    'descent_speed_mps': Range(0.01, 0.04),
+    'stop_latency_s': Range(0.001, 0.005),  # a quick stop: partial transfer stays partial
+    'stop_decel_s': Range(0.005, 0.02),
+}
 _F_COMPLIANT = {
     'contact_model': Choice(('compliant',)),
     'transfer_s': Range(0.1, 0.5),

@@ -528,7 +528,7 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
                 comps.append((f, np.asarray(h.direction), np.asarray(h.point)))
             else:  # pushing the arm: the wrist feels the inertial reaction and the mode
                 comps.append((0.15 * f, np.asarray(h.direction), s.r_load))
-            exc += 0.3 * np.gradient(f, dt) * 0.05 * float(np.dot(h.direction, s.mode_dir))
+            exc += 0.3 * f * float(np.dot(h.direction, s.mode_dir))
         elif h.kind == 'brush':
             tt = t - th
             edge = np.clip(np.minimum(tt, h.dur - tt) / 0.03, 0.0, 1.0)
