@@ -17,7 +17,6 @@ stamps, bag log times); nothing here reads a clock. The batch reference in
 """
 
 from bisect import bisect_left
-from collections import deque
 from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
@@ -31,6 +30,9 @@ from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, D
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
+
+
+_max_reduce = np.maximum.reduce
 
 
 class TimeJumpError(InputError):
@@ -437,11 +439,11 @@ class ForceTorqueStream:
         self._want_change = bool(wanted & set(CHANGE_FEATURES))
         self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
         # (force_change, torque_change) of the frames before the newest, for *_change_max.
-        self._recent_changes: deque = deque(maxlen=config.change_max_frames - 1)
+        self._recent_changes = TailBuffer(capacity=config.change_max_frames, width=2)
         self._want_shift = bool(wanted & set(SHIFT_FEATURES))
         # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
-        self._recent_shifts: deque = deque(
-            maxlen=max(config.change_max_frames, config.shift_min_frames) - 1)
+        self._recent_shifts = TailBuffer(
+            capacity=max(config.change_max_frames, config.shift_min_frames), width=2)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
@@ -557,22 +559,23 @@ class ForceTorqueStream:
 
     def _change_max(self, change: np.ndarray) -> np.ndarray:
         # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.
-        before = np.array(self._recent_changes, dtype=float).reshape(-1, 2)
-        peak = running_max(values=change, before=before,
-                           window=self.config.change_max_frames)
-        self._recent_changes.extend(map(tuple, change.tolist()))
+        window = self.config.change_max_frames
+        peak = running_max(values=change, before=self._recent_changes.view, window=window)
+        self._recent_changes.extend(change)
+        self._recent_changes.keep_last(window - 1)
         return peak
 
     def _shift_extremes(self, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # *_shift_min and *_shift_max of the (m, 2) new shifts; keeps the newest for the next call
-        before = np.array(self._recent_shifts, dtype=float).reshape(-1, 2)
+        before = self._recent_shifts.view
         n_before = before.shape[0]
         k_min, k_max = self.config.shift_min_frames, self.config.change_max_frames
         low = -running_max(values=-shift, before=-before[max(0, n_before - k_min + 1):],
                            window=k_min)
         high = running_max(values=shift, before=before[max(0, n_before - k_max + 1):],
                            window=k_max)
-        self._recent_shifts.extend(map(tuple, shift.tolist()))
+        self._recent_shifts.extend(shift)
+        self._recent_shifts.keep_last(max(k_min, k_max) - 1)
         return low, high
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -698,8 +701,9 @@ def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.nd
         return np.zeros((0, k))
     padded = np.concatenate([np.full((window - 1 - before.shape[0], k), -np.inf),
                              before, values])
-    windows = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
-    return windows.max(axis=-1)[-m:]
+    # rows i .. i + window - 1 of padded end at new row i: one gather, one reduction
+    index = np.arange(padded.shape[0] - m, padded.shape[0])[:, None] - np.arange(window)
+    return _max_reduce(padded[index], axis=1)
 
 
 def _with_angle(names: tuple, change: np.ndarray) -> dict:
@@ -730,7 +734,8 @@ def window_mean(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndar
         Same unit as ``signal``.
 
     """
-    return signal[ends[:, None] + np.arange(1 - window, 1)].mean(axis=1)
+    # np.mean's own arithmetic (the sum along the axis, then one division) without its wrapper
+    return np.add.reduce(signal[ends[:, None] + np.arange(1 - window, 1)], axis=1) / window
 
 
 def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
