@@ -15,7 +15,7 @@ import numpy as np
 
 from contact_detector.errors import BagError, InputError
 from contact_detector.io import cdr
-from contact_detector.io.bags import iter_messages
+from contact_detector.io.bags import AudioSeries, iter_messages
 from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
 
 DEFAULT_AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
@@ -37,6 +37,11 @@ class StreamSpec:
         Interleaved channels in each audio message.
     channel : int or None
         Channel to keep; None mixes all channels.
+    coding : str
+        ``pcm`` (samples in the messages) or ``mp3`` (``AudioData`` bytes form an mp3
+        stream, decoded by :mod:`contact_detector.io.mp3`).
+    audio_rate : float or None
+        Sample rate, Hz (needed for mp3: the decoded samples are timed with it).
 
     """
 
@@ -46,6 +51,8 @@ class StreamSpec:
     audio_msg_type: Optional[str] = None
     channels: int = 1
     channel: Optional[int] = None
+    coding: str = 'pcm'
+    audio_rate: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -98,7 +105,7 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
     Parameters
     ----------
     path : Path
-        A rosbag2 directory (sqlite3 or mcap).
+        A rosbag2 directory (sqlite3 or mcap) or a ROS 1 ``.bag`` file.
     spec : StreamSpec
         Topics and audio format.
 
@@ -141,6 +148,35 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
 def load_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> List[Event]:
     """Return :func:`sensor_events` as a list (decode a bag once, replay it many times)."""
     return list(sensor_events(path, spec=spec))
+
+
+def read_audio_series(path: Path, *, spec: StreamSpec) -> AudioSeries:
+    """
+    Read a bag's audio into one array, through the node's adapters (any supported type).
+
+    Returns
+    -------
+    AudioSeries
+        ``samples`` in full-scale units (float64 in [-1, 1]), chunk ends, and per chunk the
+        time of its last sample (its header stamp, else its log time).
+
+    Raises
+    ------
+    BagError
+        No readable audio.
+
+    """
+    chunks, stamps = [], []
+    for event in sensor_events(path, spec=spec):
+        if isinstance(event, AudioEvent):
+            samples = event.samples
+            scale = 32768.0 if samples.dtype == np.int16 else 1.0
+            chunks.append(samples.astype(np.float64) / scale)
+            stamps.append(event.stamp)
+    if not chunks:
+        raise BagError(f'{path}: no readable audio on {spec.audio_topic}')
+    ends = np.cumsum([c.size for c in chunks]).astype(np.int64)
+    return AudioSeries(np.concatenate(chunks), ends, np.asarray(stamps))
 
 
 def truth_onsets(events: List[Event]) -> List[tuple]:
