@@ -144,17 +144,14 @@ def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: floa
         wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,
         audio_msg_type=streams.audio_msg_type, channels=streams.channels,
         coding=streams.coding, audio_rate=rate))
-    ft_rate = float(1.0 / np.median(np.diff(wrench.t))) if len(wrench.t) > 1 else 100.0
+    ft_rate = streams.wrench_rate
     audio_t0 = float(entry['start_time']) if entry else audio.t0(rate)
     truth = [t for t, value in read_truth(bag) if value]
     if not truth and entry:
         truth = [entry['onset_t']]
     t_ref = float(entry['start_time']) if entry else float(min(wrench.t[0], audio_t0))
 
-    cfg = config
-    if abs(cfg.ft_rate_hz - ft_rate) > 1e-6 and ft_rate % cfg.ft_rate_hz > 1e-6:
-        cfg = FeatureConfig.from_dict({**config.to_dict(), 'ft_rate_hz': ft_rate})
-    frames = batch_features(config=cfg, audio=audio.samples, audio_rate=rate, audio_t0=audio_t0,
+    frames = batch_features(config=config, audio=audio.samples, audio_rate=rate, audio_t0=audio_t0,
                             ft_t=wrench.t, force=wrench.force, torque=wrench.torque,
                             ft_input_rate=ft_rate)
 
