@@ -29,6 +29,8 @@ setup(
         'matplotlib>=3.6,<4',
         'tqdm>=4.60,<5',
         'PyYAML>=6,<7',
+        # mp3 audio in bags (libsndfile >= 1.1 with mpg123/LAME, bundled in the wheels).
+        'soundfile>=0.12,<1',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI wheels, for machines without apt ROS.

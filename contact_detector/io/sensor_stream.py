@@ -7,6 +7,7 @@ and with the bag's log (receive) time otherwise, wrench samples with their heade
 the features computed offline are those the node computes live: no train/serve skew.
 """
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, List, Optional, Union
@@ -120,6 +121,9 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
         form) and the audio topic holds another type.
 
     """
+    if spec.coding == 'mp3':
+        yield from _mp3_events(Path(path), spec=spec)
+        return
     topics = [spec.wrench_topic, spec.audio_topic, spec.truth_topic]
     for message in iter_messages(Path(path), topics=topics, decoders=FAST_DECODERS):
         now = message.log_time_ns * 1e-9
@@ -143,6 +147,45 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
         except InputError as err:
             kind = 'wrench' if message.topic == spec.wrench_topic else 'audio'
             yield BadEvent(kind=kind, reason=str(err), now=now)
+
+
+def _mp3_events(path: Path, *, spec: StreamSpec) -> Iterator[Event]:
+    """:func:`sensor_events` for an mp3 AudioData stream: decoded at once, then interleaved."""
+    from contact_detector.io.mp3 import decode_mp3
+
+    chunks, log_t = [], []
+    for message in iter_messages(path, topics=[spec.audio_topic]):
+        audio = getattr(message.msg, 'audio', message.msg)       # AudioDataStamped: .audio
+        chunks.append(bytes(np.asarray(audio.data, dtype=np.uint8)))
+        log_t.append(message.log_time_ns * 1e-9)
+    if not chunks:
+        raise BagError(f'{path}: no messages on {spec.audio_topic}')
+    try:
+        mp3 = decode_mp3(chunks=chunks, log_t=log_t, channel=spec.channel)
+    except InputError as err:
+        raise BagError(f'{path}: {spec.audio_topic}: {err}') from err
+    if spec.audio_rate and abs(mp3.rate - spec.audio_rate) > 0.5:
+        raise BagError(f'{path}: the mp3 stream on {spec.audio_topic} is at {mp3.rate:g} Hz, '
+                       f'not {spec.audio_rate:g} Hz as AudioInfo / --audio-rate say')
+    audio_events, lo = [], 0
+    for k, end in enumerate(mp3.ends.tolist()):
+        if end > lo:
+            audio_events.append(AudioEvent(samples=mp3.samples[lo:end],
+                                           stamp=mp3.t0 + (end - 1) / mp3.rate, now=log_t[k]))
+            lo = end
+    others = sensor_events(path, spec=dataclasses.replace(spec, coding='pcm',
+                                                          audio_topic='\0 no audio'))
+    # both in log-time order: merge them (audio first on ties, as it was logged first)
+    pending = iter(audio_events)
+    nxt = next(pending, None)
+    for event in others:
+        while nxt is not None and nxt.now <= event.now:
+            yield nxt
+            nxt = next(pending, None)
+        yield event
+    while nxt is not None:
+        yield nxt
+        nxt = next(pending, None)
 
 
 def load_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> List[Event]:
