@@ -262,3 +262,22 @@ def test_iter_messages_reads_ros1_with_and_without_fast_decoders(tmp_path):
     events = load_events(bag, spec=spec)
     audio = np.concatenate([e.samples for e in events if isinstance(e, AudioEvent)])
     assert np.array_equal(audio, trial.audio[:audio.size]) and audio.size == trial.audio.size
+
+
+def test_200_hz_ros1_bags_without_flags_decide_as_with_the_settings_by_hand(tmp_path, capsys):
+    """Recordings as users have them: ROS 1, 200 Hz F/T, no rate anywhere in the bag."""
+    folder = tmp_path / 'robot'
+    for index in range(3):
+        trial = simulate_trial(seed=31, index=index, ft_rate=200.0)
+        write_trial_bag(trial=trial, path=folder / f'place_{index}', storage='ros1')
+    found, by_hand = tmp_path / 'found.jsonl', tmp_path / 'by_hand.jsonl'
+    assert detect_cli.main([str(folder), '--out', str(found)]) == 0
+    printed = capsys.readouterr().out
+    assert '3 bags: wrench /wrist_wrench at 200 Hz (stamps)' in printed
+    assert '16000 Hz, 1 ch (estimated)' in printed
+    assert detect_cli.main([str(folder), '--wrench-topic', '/wrist_wrench', '--audio-topic',
+                            '/audio', '--audio-rate', '16000', '--wrench-rate', '200',
+                            '--out', str(by_hand)]) == 0
+    rows = _rows(found)
+    assert rows == _rows(by_hand)
+    assert sum(row.get('event') == 'release' for row in rows) == 3
