@@ -274,9 +274,33 @@ def _check_bag(path: Path) -> None:
 
 
 def topic_types(path: Path) -> dict[str, str]:
-    """Topic name -> message type of a bag."""
-    with open_reader(path) as reader:
-        return {c.topic: c.msgtype for c in reader.connections}
+    """
+    Topic name -> message type of a bag (from its index: no message is read).
+
+    Raises
+    ------
+    BagError
+        Not a bag, or it cannot be opened.
+
+    """
+    path = Path(path)
+    _check_bag(path)
+    if is_bag_dir(path):
+        # metadata.yaml with libyaml: rosbags' reader parses it with ruamel (~50 ms a bag)
+        try:
+            import yaml
+            loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+            info = yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
+                             Loader=loader)['rosbag2_bagfile_information']
+            return {t['topic_metadata']['name']: t['topic_metadata']['type']
+                    for t in info['topics_with_message_count']}
+        except Exception:  # anything unusual: let rosbags read it (and report the problem)
+            pass
+    try:
+        with (Ros1Reader(path) if is_ros1_bag(path) else Reader(path)) as reader:
+            return {c.topic: c.msgtype for c in reader.connections}
+    except Exception as err:  # rosbags raises several unrelated types for bad bags
+        raise BagError(f'cannot open bag {path}: {err}') from err
 
 
 def read_truth(path: Path, *, topic: str = TRUTH_TOPIC) -> list[tuple[float, bool]]:

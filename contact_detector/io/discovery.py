@@ -10,6 +10,8 @@
 * F/T rate: the command's flag, else the mean period of the regular steps of the header stamps
   (:func:`measure_wrench_rate`).
 
+Both measurements come from one pass over the first messages (:func:`probe`).
+
 With several candidate topics the error lists them; a flag then chooses. Only the first
 :data:`PROBE_MESSAGES` messages of a topic (and at most :data:`PROBE_SECONDS` of audio) are
 read, so discovery costs little next to decoding the bag.
@@ -23,7 +25,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from contact_detector.errors import BagError, ConfigError, InputError
-from contact_detector.io.bags import iter_messages, open_reader
+from contact_detector.io.bags import iter_messages, topic_types
 from contact_detector.io.cdr import FAST_DECODERS
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_to_samples, check_audio_info,
                                           embedded_audio_format, normalise_msg_type,
@@ -33,10 +35,10 @@ WRENCH_TYPE = 'geometry_msgs/msg/WrenchStamped'
 AUDIO_INFO_TYPE = 'audio_common_msgs/msg/AudioInfo'
 #: Sample rates an estimate is snapped to, Hz.
 STANDARD_AUDIO_RATES = (8000.0, 11025.0, 16000.0, 22050.0, 32000.0, 44100.0, 48000.0, 96000.0)
-#: Messages read per topic to measure rates.
-PROBE_MESSAGES = 2000
+#: Wrench messages read to measure the F/T rate.
+PROBE_MESSAGES = 500
 #: Seconds of audio (log time) used to estimate an audio rate.
-PROBE_SECONDS = 20.0
+PROBE_SECONDS = 5.0
 
 
 @dataclass(frozen=True)
@@ -117,9 +119,48 @@ def _info_topic(types: dict, audio_topic: str) -> Optional[str]:
     return near[0] if len(near) == 1 else None
 
 
-def measure_wrench_rate(path: Path, *, topic: str) -> float:
+def probe(path: Path, *, wrench_topic: Optional[str], audio_topic: Optional[str] = None,
+          audio_msg_type: str = '', channels: int = 1) -> tuple[list, list, list]:
     """
-    F/T rate from the header stamps over the first messages, Hz.
+    Read the first messages of the wrench and audio topics once, for the rate measurements.
+
+    Returns
+    -------
+    stamps : list of float
+        Header stamps of the first :data:`PROBE_MESSAGES` wrench messages, s.
+    sizes, times : list
+        Sample frames and log times (s) of the audio chunks of the first
+        :data:`PROBE_SECONDS` (empty without ``audio_topic``).
+
+    """
+    stamps, sizes, times = [], [], []
+    topics = [t for t in (wrench_topic, audio_topic) if t]
+    wrench_done = wrench_topic is None
+    audio_done = audio_topic is None
+    for message in iter_messages(path, topics=topics, decoders=FAST_DECODERS):
+        if message.topic == wrench_topic and not wrench_done:
+            try:
+                stamps.append(wrench_sample(message.msg)[0])
+            except InputError:
+                pass
+            wrench_done = len(stamps) >= PROBE_MESSAGES
+        elif message.topic == audio_topic and not audio_done:
+            try:
+                samples = audio_to_samples(message.msg, msg_type=audio_msg_type,
+                                           channels=channels)
+            except InputError:
+                continue
+            sizes.append(samples.size)
+            times.append(message.log_time_ns * 1e-9)
+            audio_done = times[-1] - times[0] >= PROBE_SECONDS
+        if wrench_done and audio_done:
+            break
+    return stamps, sizes, times
+
+
+def measure_wrench_rate(*, stamps: Sequence[float], path: Path, topic: str) -> float:
+    """
+    F/T rate from the header stamps of the first messages, Hz.
 
     The regular steps are those shorter than 1.5 median steps (gaps and dropped messages
     left out); the rate is their count over their total duration: the mean period, which
@@ -128,18 +169,10 @@ def measure_wrench_rate(path: Path, *, topic: str) -> float:
     Raises
     ------
     BagError
-        Fewer than two distinct stamps.
+        Fewer than two increasing stamps.
 
     """
-    stamps = []
-    for message in iter_messages(path, topics=[topic], decoders=FAST_DECODERS):
-        try:
-            stamps.append(wrench_sample(message.msg)[0])
-        except InputError:
-            continue
-        if len(stamps) >= PROBE_MESSAGES:
-            break
-    steps = np.diff(np.asarray(stamps))
+    steps = np.diff(np.asarray(stamps, dtype=float))
     steps = steps[steps > 0]
     if steps.size == 0:
         raise BagError(f'{path}: cannot measure the F/T rate of {topic} (fewer than two '
@@ -148,7 +181,8 @@ def measure_wrench_rate(path: Path, *, topic: str) -> float:
     return float(regular.size / regular.sum())
 
 
-def estimate_audio_rate(path: Path, *, topic: str, msg_type: str, channels: int) -> float:
+def estimate_audio_rate(*, sizes: Sequence[int], times: Sequence[float], path: Path,
+                        topic: str) -> float:
     """
     Audio samples per second of bag log time: ``sum(n_k, k > 0) / (t_last - t_first)``, Hz.
 
@@ -160,16 +194,6 @@ def estimate_audio_rate(path: Path, *, topic: str, msg_type: str, channels: int)
         Fewer than three readable chunks, or no log time elapsed.
 
     """
-    sizes, times = [], []
-    for message in iter_messages(path, topics=[topic], decoders=FAST_DECODERS):
-        try:
-            samples = audio_to_samples(message.msg, msg_type=msg_type, channels=channels)
-        except InputError:
-            continue
-        sizes.append(samples.size)
-        times.append(message.log_time_ns * 1e-9)
-        if len(sizes) >= PROBE_MESSAGES or times[-1] - times[0] >= PROBE_SECONDS:
-            break
     if len(sizes) < 3 or times[-1] <= times[0]:
         raise BagError(f'{path}: too little audio on {topic} to estimate its sample rate; '
                        'give --audio-rate')
@@ -212,8 +236,7 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
 
     """
     path = Path(path)
-    with open_reader(path) as reader:
-        types = {c.topic: c.msgtype for c in reader.connections}
+    types = topic_types(path)
     wanted_audio = normalise_msg_type(audio_msg_type) if audio_msg_type else None
     w_topic = _pick(path, types, lambda m: m == WRENCH_TYPE, 'geometry_msgs/WrenchStamped',
                     '--wrench-topic', wrench_topic)
@@ -258,18 +281,22 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
         rate, source = float(audio_rate), 'flag'
     elif rate is None and param_audio_rate:
         rate, source = float(param_audio_rate), param_source
-    elif rate is None:
-        if found_coding == 'mp3':
-            raise BagError(f'{path}: mp3 audio on {a_topic} without AudioInfo; give '
-                           '--audio-rate')
-        raw = estimate_audio_rate(path, topic=a_topic, msg_type=a_type, channels=n_ch)
+    estimate = rate is None
+    if estimate and found_coding == 'mp3':
+        raise BagError(f'{path}: mp3 audio on {a_topic} without AudioInfo; give --audio-rate')
+    stamps, sizes, times = probe(path, wrench_topic=None if wrench_rate else w_topic,
+                                 audio_topic=a_topic if estimate else None,
+                                 audio_msg_type=a_type, channels=n_ch)
+    if estimate:
+        raw = estimate_audio_rate(sizes=sizes, times=times, path=path, topic=a_topic)
         rate, source = snap_audio_rate(raw), 'estimated'
         warnings.append(f'audio rate of {a_topic} estimated from the recording time: '
                         f'{raw:.0f} samples/s -> {rate:g} Hz')
     if wrench_rate:
         w_rate, w_source = float(wrench_rate), 'flag'
     else:
-        w_rate, w_source = measure_wrench_rate(path, topic=w_topic), 'stamps'
+        w_rate = measure_wrench_rate(stamps=stamps, path=path, topic=w_topic)
+        w_source = 'stamps'
     return Streams(wrench_topic=w_topic, audio_topic=a_topic, audio_msg_type=a_type,
                    audio_rate=float(rate), audio_rate_source=source, channels=n_ch,
                    coding=found_coding, wrench_rate=w_rate, wrench_rate_source=w_source,
