@@ -136,7 +136,7 @@ def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: floa
                                audio_rate=audio_rate,
                                param_audio_rate=(entry or {}).get('audio_rate'))
     for line in streams.warnings:
-        print(f'{PROG}: {line}', file=sys.stderr)
+        print(f'{PROG}: warning: {line}', file=sys.stderr)
     print(f'{PROG}: {bag.name}: {streams.describe()}')
     wrench = read_wrench(bag, topic=streams.wrench_topic)
     rate = streams.audio_rate
