@@ -26,9 +26,9 @@ import numpy as np
 
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
-from contact_detector.features.resample import WrenchResampler
 from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
                                               FeatureConfig, PAPER_FEATURES)
+from contact_detector.features.resample import WrenchResampler
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]

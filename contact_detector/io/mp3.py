@@ -78,7 +78,7 @@ def mp3_frames(raw: bytes) -> list:
     return frames
 
 
-def decode_mp3(*, chunks: Sequence[bytes], log_t: Sequence[float], channels: int = 1,
+def decode_mp3(*, chunks: Sequence[bytes], log_t: Sequence[float],
                channel: int | None = None) -> Mp3Audio:
     """
     Decode the mp3 stream of consecutive messages and time its samples (module docstring).
@@ -89,10 +89,8 @@ def decode_mp3(*, chunks: Sequence[bytes], log_t: Sequence[float], channels: int
         The ``data`` of each AudioData message, in order.
     log_t : sequence of float
         Each message's log (receive) time, s.
-    channels : int
-        Unused (the stream says how many); kept for symmetry with PCM.
     channel : int or None
-        Channel to keep; None averages all.
+        Channel to keep; None averages all (the stream says how many there are).
 
     Returns
     -------
