@@ -183,7 +183,7 @@ def test_faults_against_the_live_node(model, tmp_path):
 @pytest.mark.parametrize('param, value, match', [
     ('release.threshold', '1.5', 'release.threshold'),
     ('audio.sample_rate', '100.0', 'audio.sample_rate'),
-    ('wrench.rate', '150.0', 'integer multiple'),
+    ('wrench.rate', '20000.0', 'outside'),
     ('qos.reliability', 'sometimes', 'qos.reliability'),
 ])
 def test_invalid_parameter_stops_the_node_process(model, param, value, match):

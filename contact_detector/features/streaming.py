@@ -27,6 +27,7 @@ from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
                                               FeatureConfig, PAPER_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.resample import WrenchResampler
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
@@ -394,8 +395,10 @@ class ForceTorqueStream:
     """
     Spectral features of |F| and |T| over a sliding DFT window.
 
-    Input at ``input_rate`` (an integer multiple M of ``ft_rate_hz``) is averaged over blocks of
-    M samples (the block's time is its last sample's). A feature frame ends at every
+    Input at ``input_rate`` is first brought onto the ``ft_rate_hz`` grid by
+    :class:`~contact_detector.features.resample.WrenchResampler` (an integer multiple M is
+    averaged over blocks of M samples timed at their last sample; any other rate from 50 Hz to
+    10 kHz is box-filtered and interpolated). A feature frame ends at every
     ``ft_hop``-th decimated sample once ``ft_window`` samples (and the delta history) are
     there; its time is the time of its last sample.
 
@@ -415,13 +418,10 @@ class ForceTorqueStream:
 
     def __init__(self, *, config: FeatureConfig, input_rate: float,
                  gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
-        ratio = input_rate / config.ft_rate_hz if config.ft_rate_hz else 0.0
-        if not math.isfinite(ratio) or ratio < 1 or abs(ratio - round(ratio)) > 1e-6:
-            raise ConfigError(f'wrench rate {input_rate} Hz must be an integer multiple of the '
-                              f'feature rate ft_rate_hz={config.ft_rate_hz} Hz')
+        self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz)
         self.config = config
         self.input_rate = float(input_rate)
-        self.decimation = int(round(ratio))
+        self.decimation = self._resampler.block     # 0: not an integer ratio (interpolated)
         self.gap_reset_s = max(gap_reset_s, 1.5 / input_rate)
         self.backjump_tolerance_s = backjump_tolerance_s
         self.use_delta = [name for name in config.extra_features if name in DELTA_FEATURES]
@@ -460,8 +460,7 @@ class ForceTorqueStream:
 
     def _restart(self) -> None:
         # Forget the window, previous spectra and partial block; keep the last stamp.
-        self._block_t = np.zeros(0)
-        self._block_v = np.zeros((0, 6))
+        self._resampler.reset()
         self._mags.clear()                  # |F|, |T| of the newest decimated samples
         self._mag_ts.clear()                # their times
         self._mag_start = 0                 # decimated index of the oldest sample kept
@@ -579,19 +578,10 @@ class ForceTorqueStream:
         return low, high
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        m = self.decimation
-        if m == 1:
-            bt, bv = t, v           # no partial block is ever left: nothing to prepend
-        else:
-            bt = np.concatenate([self._block_t, t])
-            bv = np.concatenate([self._block_v, v])
-        n_blocks = bt.size // m
-        used = n_blocks * m
-        self._block_t, self._block_v = bt[used:], bv[used:]
+        dec_t, dec_v = self._resampler.push(t=t, values=v)
+        n_blocks = dec_t.size
         if n_blocks == 0:
             return np.zeros(0), np.zeros((0, len(self.columns)))
-        dec_t = bt[m - 1:used:m]
-        dec_v = bv[:used].reshape(n_blocks, m, 6).mean(axis=1) if m > 1 else bv[:used]
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)

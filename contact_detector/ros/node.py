@@ -49,6 +49,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.features.resample import rate_mismatch, StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
@@ -200,6 +201,8 @@ class ContactDetectorNode(Node):
         self._pending: Optional[NodeConfig] = None
         self.audio = _Stream()
         self.wrench = _Stream()
+        self.wrench_rate = StampRate()      # the rate the wrench really arrives at
+        self._rate_warned = False
         self.audio_format = AudioFormat(sample_rate=cfg.audio_sample_rate,
                                         channels=cfg.audio_channels)
         # ros-drivers types: the format is confirmed by audio_info (None = not yet).
@@ -433,6 +436,7 @@ class ContactDetectorNode(Node):
             return
         stream.last_stamp = t
         stream.window_samples += 1
+        self.wrench_rate.add(t)
         self._handle(self.detector.on_wrench_one(t=t, values=values, now=now), now, entry,
                      'wrench')
 
@@ -632,8 +636,16 @@ class ContactDetectorNode(Node):
                     for name in WARN_COUNTERS}
         troubles = {name: value for name, value in troubles.items() if value > 0}
         self._window_counts = counts
+        measured = self.wrench_rate.rate()
+        values['wrench_measured_rate_hz'] = 'n/a' if measured is None else f'{measured:.1f}'
+        mismatch = rate_mismatch(measured=measured, configured=cfg.wrench_rate)
+        if mismatch and not self._rate_warned:
+            self.get_logger().warning(mismatch)      # once; /diagnostics says it every period
+        self._rate_warned = mismatch is not None
         if self.audio_refused:
             level, message = DiagnosticStatus.ERROR, f'audio refused: {self.audio_refused}'
+        elif mismatch:
+            level, message = DiagnosticStatus.WARN, mismatch
         elif stale:
             level, message = DiagnosticStatus.WARN, f'stale or missing input: {", ".join(stale)}'
         elif troubles:
@@ -642,7 +654,7 @@ class ContactDetectorNode(Node):
         else:
             level, message = DiagnosticStatus.OK, (
                 f'running, release {"armed" if det.armed else "disarmed"}')
-        if level != DiagnosticStatus.OK:
+        if level != DiagnosticStatus.OK and message != mismatch:
             # Faults without a log line of their own (dropouts, stale input, clipping) show
             # up here, throttled like the others.
             self._warn(f'diagnostics-{message.split(":")[0]}', f'diagnostics: {message}')

@@ -93,8 +93,10 @@ PARAMS: Sequence[ParamSpec] = (
               'are dropped as corrupt.', 0.001, 60.0),
     ParamSpec('audio.wait_for_info', True, 'ros-drivers audio_common types: drop audio until '
               'audio_info has confirmed raw S16LE; false = trust the audio.* parameters.'),
-    ParamSpec('wrench.rate', 100.0, 'Wrench rate in Hz, an integer multiple of the F/T '
-              'feature rate of the model.', 1.0, 100000.0),
+    ParamSpec('wrench.rate', 100.0, 'Wrench rate in Hz, 50 to 10000: resampled onto the F/T '
+              'feature rate of the model (block means for integer multiples). The node '
+              'measures the real rate and warns when it differs by more than 10 %.',
+              1.0, 100000.0),
     ParamSpec('wrench.stamp_source', 'header', "Time of a wrench sample: 'header' = its stamp, "
               "'receive' = the node clock on arrival.", choices=STAMP_SOURCES),
     ParamSpec('qos.reliability', 'best_effort', 'Reliability of the input subscriptions '
