@@ -313,7 +313,7 @@ def test_lazy_wrench_is_taken_with_the_next_audio(harness_factory, model, trial)
 
 @pytest.mark.parametrize('params, match', [
     ({'audio.sample_rate': 100.0}, 'audio.sample_rate'),
-    ({'audio.sample_rate': 44100}, 'audio.sample_rate.*decimal point'),
+    ({'audio.sample_rate': '44100'}, 'audio.sample_rate must be a float'),
     ({'audio.msg_type': 'sensor_msgs/msg/Image'}, 'audio.msg_type'),
     ({'audio.channels': 2, 'audio.channel': 2}, 'audio.channel=2'),
     ({'audio.stamp_source': 'header'}, 'audio.stamp_source'),
