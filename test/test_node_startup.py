@@ -118,6 +118,14 @@ class Watcher:
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(node)
         self.executor.add_node(self.io)
+        # The node's log lines are read from /rosout: wait until one of its lines arrives
+        # (the graph may still list a node of the same name from an earlier test).
+        end = time.monotonic() + 10.0
+        while not any(log.msg == 'test: rosout ready' for log in self.logs):
+            assert time.monotonic() < end, 'no /rosout from the node'
+            node.get_logger().info('test: rosout ready')
+            self.spin_for(0.05)
+        self.logs[:] = [log for log in self.logs if log.msg != 'test: rosout ready']
 
     def _on_log(self, msg: Log) -> None:
         if msg.name == self.node.get_logger().name:
@@ -144,7 +152,8 @@ class Watcher:
 
 
 def test_waiting_for_input_is_said_once_then_stale_input_warns(context, model):
-    node = ContactDetectorNode(context=context, parameter_overrides=[
+    # A name of its own: rcl keeps one /rosout publisher per logger name and process.
+    node = ContactDetectorNode('contact_detector_waiting', context=context, parameter_overrides=[
         Parameter('model.path', value=str(model)),
         Parameter('diagnostics.period_s', value=0.1), Parameter('log_throttle_s', value=0.5),
         Parameter('max_input_delay_s', value=0.2),
