@@ -12,8 +12,9 @@ setup(
     packages=find_packages(exclude=['test', 'test.*', 'benchmarks']),
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
-        ('share/' + package_name, ['package.xml', 'README.md']),
+        ('share/' + package_name, ['package.xml', 'README.md', 'CHANGELOG.rst', 'LICENSE']),
         ('share/' + package_name + '/params', glob('params/*.yaml')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
         ('share/' + package_name + '/models', glob('models/*.joblib') + glob('models/*.json')
          + glob('models/*.md')),
     ],
@@ -45,6 +46,7 @@ setup(
     entry_points={
         'console_scripts': [
             'contact_detector_node = contact_detector.ros.node:main',
+            'contact_detector_lifecycle_node = contact_detector.ros.lifecycle_node:main',
             'contact-detector = contact_detector.cli.main:main',
         ],
     },
