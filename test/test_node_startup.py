@@ -100,6 +100,24 @@ def test_integers_from_the_command_line_and_a_params_file(model, tmp_path):
         rclpy.try_shutdown(context=ctx)
 
 
+def test_hsr_preset_params_file_on_top_of_the_default(model):
+    # What the launch file's robot:=hsr passes: both files, the preset last.
+    params = node_support.REPO / 'params'
+    ctx = Context()
+    rclpy.init(context=ctx, args=['--ros-args',
+                                  '--params-file', str(params / 'contact_detector.yaml'),
+                                  '--params-file', str(params / 'hsr.yaml'),
+                                  '-p', f'model.path:={model}'])
+    try:
+        node = ContactDetectorNode(context=ctx)
+        assert node.config.gripper_enabled and node.gripper_pub is not None
+        assert node.gripper_pub.topic_name == '/gripper_controller/joint_trajectory'
+        assert node.config.audio_sample_rate == 16000.0       # from contact_detector.yaml
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
 # --- waiting for input ---------------------------------------------------------------------------
 
 class Watcher:
