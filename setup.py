@@ -35,6 +35,9 @@ setup(
         # ROS 2 Jazzy from PyPI wheels, for machines without apt ROS.
         'ros': ['ros-jazzy-rclpy[fastrtps]>=7.1,<8', 'ros-jazzy-common-interfaces>=5.3,<6'],
         'safe': ['skops>=0.10,<1'],
+        # colcon build / colcon test of this package (tools/colcon_check.sh), from PyPI.
+        'colcon': ['colcon-common-extensions>=0.3', 'colcon-ros>=0.5',
+                   'ros-jazzy-ament-package>=0.16,<0.17'],
         'test': ['pytest>=7', 'hypothesis>=6.80', 'flake8>=6', 'flake8-quotes>=3.3',
                  'pydocstyle>=6.3', 'psutil>=5.9'],
     },

@@ -39,6 +39,8 @@ from contact_detector.ros.params import PARAMS
 from contact_detector.sim.trial import simulate_trial
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 TICK_S = 0.01              # /clock period of the simulated bag player
 TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
 
