@@ -19,7 +19,8 @@ Interface (all names relative, remappable)::
     services    ~/arm                std_srvs/srv/SetBool
                 ~/reset              std_srvs/srv/Trigger
 
-See ``docs/node.md``.
+The wiring (:class:`DetectorWiring`) is shared with the managed (lifecycle) variant,
+:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``.
 """
 
 from collections import deque
