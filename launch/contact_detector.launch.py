@@ -89,9 +89,9 @@ def _launch_setup(context, *args, **kwargs) -> list:
     parameters.append(overrides)
     remap = dict(robot['remap'])
     remap.update({topic: arg(topic) for topic in TOPICS if arg(topic)})
-    common = dict(package=PACKAGE, name=arg('node_name'), namespace=arg('namespace'),
-                  parameters=parameters, remappings=list(remap.items()), output='screen',
-                  ros_arguments=['--log-level', arg('log_level')])
+    common = {'package': PACKAGE, 'name': arg('node_name'), 'namespace': arg('namespace'),
+              'parameters': parameters, 'remappings': list(remap.items()), 'output': 'screen',
+              'ros_arguments': ['--log-level', arg('log_level')]}
     managed = arg('managed')
     if managed == 'false':
         return [Node(executable=EXECUTABLES[managed], **common)]

@@ -1,4 +1,5 @@
-"""setup.py's arguments as setuptools gets them (setup() replaced by a recorder, nothing built).
+"""
+setup.py's arguments as setuptools gets them (setup() replaced by a recorder, nothing built).
 
 Used by test_package.py and test_launch.py to check what a build installs.
 """
@@ -27,7 +28,7 @@ def setup_kwargs() -> dict:
 
 
 def installed_files() -> dict:
-    """Install path (relative to the install prefix) -> source file, from ``data_files``."""
+    """Return install path (relative to the prefix) -> source file, from ``data_files``."""
     files = {}
     for directory, sources in setup_kwargs()['data_files']:
         for source in sources:
@@ -36,6 +37,6 @@ def installed_files() -> dict:
 
 
 def console_scripts() -> dict:
-    """Executable name -> ``module:function`` of the console scripts."""
+    """Return executable name -> ``module:function`` of the console scripts."""
     entries = setup_kwargs()['entry_points']['console_scripts']
     return dict((part.strip() for part in entry.split('=', 1)) for entry in entries)

@@ -1,4 +1,5 @@
-"""colcon build and colcon test of the package, as on a ROS install (tools/colcon_check.sh).
+"""
+colcon build and colcon test of the package, as on a ROS install (tools/colcon_check.sh).
 
 colcon, colcon-ros and ament_package come from PyPI (setup.py extra "colcon"). The build is
 checked for what it installs; colcon test runs the linters, the package checks and the core

@@ -1,4 +1,5 @@
-"""launch/contact_detector.launch.py against what the package installs (no launch needed).
+"""
+launch/contact_detector.launch.py against what the package installs (no launch needed).
 
 The launch file is read with ast: every params file and executable it names must be installed
 by setup.py (data_files, console_scripts), and the topics it remaps must be the node's. ROS's
@@ -10,11 +11,10 @@ import ast
 import importlib.util
 from pathlib import Path
 
-import pytest
-import yaml
-
 from contact_detector.ros.params import PARAMS_BY_NAME
+import pytest
 import setup_support
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 LAUNCH = ROOT / 'launch' / 'contact_detector.launch.py'

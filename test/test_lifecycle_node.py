@@ -1,4 +1,5 @@
-"""The managed node with real rclpy: its transitions, driven as a lifecycle manager does.
+"""
+The managed node with real rclpy: its transitions, driven as a lifecycle manager does.
 
 The transitions go through the node's lifecycle services (``/<node>/change_state``,
 ``get_state``: what ``ros2 lifecycle set`` and nav2's lifecycle manager call), a few through
@@ -9,9 +10,12 @@ as in test_node.py.
 import time
 
 from builtin_interfaces.msg import Time
+from contact_detector.ros.lifecycle_node import ContactDetectorLifecycleNode
+from contact_detector.sim.trial import simulate_trial
 from geometry_msgs.msg import WrenchStamped
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
+import node_support
 import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
@@ -24,14 +28,10 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool, Int16MultiArray
 
-from contact_detector.ros.lifecycle_node import ContactDetectorLifecycleNode
-from contact_detector.sim.trial import simulate_trial
-import node_support
-
 pytestmark = pytest.mark.rclpy
 
 TICK_S = 0.01
-TRIAL = dict(seed=3, index=21, hits='hand')
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}
 
 
 @pytest.fixture(scope='module')

@@ -1,4 +1,5 @@
-"""The node as a user starts it: integers for float parameters, quiet until the first input.
+"""
+The node as a user starts it: integers for float parameters, quiet until the first input.
 
 Real rclpy, in-process; the node's log lines are read from /rosout, as ``ros2 launch`` and
 ``rqt_console`` see them.
@@ -8,8 +9,11 @@ import dataclasses
 import math
 import time
 
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.ros.params import NodeConfig, PARAMS
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+import node_support
 import pytest
 from rcl_interfaces.msg import Log
 import rclpy
@@ -18,10 +22,6 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Int16MultiArray
-
-from contact_detector.ros.node import ContactDetectorNode
-from contact_detector.ros.params import NodeConfig, PARAMS
-import node_support
 
 pytestmark = pytest.mark.rclpy
 
@@ -42,7 +42,7 @@ def context():
 
 
 def as_int(value: float) -> int:
-    """An integer inside the parameter's range near its default (0.05 -> 1, -1.0 -> -1)."""
+    """Return an integer inside the parameter's range near its default (0.05 -> 1)."""
     return int(math.ceil(value))
 
 

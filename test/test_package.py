@@ -1,4 +1,5 @@
-"""package.xml against the code: every import declared with its rosdep key; license; URLs.
+"""
+package.xml against the code: every import declared with its rosdep key; license; URLs.
 
 ``rosdep install --from-paths src`` installs what package.xml declares and nothing else, so an
 import without its key fails on a robot, not here (where the venv has everything). No rclpy.

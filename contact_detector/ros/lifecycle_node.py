@@ -1,4 +1,5 @@
-"""The managed (lifecycle) variant of the contact detector node.
+"""
+The managed (lifecycle) variant of the contact detector node.
 
 Same interface, parameters and processing as :class:`~contact_detector.ros.node.
 ContactDetectorNode` (both run :class:`~contact_detector.ros.node.DetectorWiring`), driven by
@@ -28,13 +29,12 @@ import gc
 import sys
 from typing import Any, Optional
 
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
-
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.ros.node import DetectorWiring
 from contact_detector.ros.params import config_from_values, current_values, declare_all
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 
 
 class ContactDetectorLifecycleNode(DetectorWiring, LifecycleNode):
