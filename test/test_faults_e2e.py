@@ -38,6 +38,8 @@ from std_msgs.msg import Bool
 
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 HERE = Path(__file__).resolve().parent
 LATENCY_BUDGET_S = 0.3
 FAULTS_A = 'nan,empty,huge,backwards,duplicate,future,burst,ft100ms,jump'

@@ -39,6 +39,8 @@ from contact_detector.ros.params import PARAMS
 from contact_detector.sim.trial import simulate_trial
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 TICK_S = 0.01              # /clock period of the simulated bag player
 TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
 
@@ -313,7 +315,7 @@ def test_lazy_wrench_is_taken_with_the_next_audio(harness_factory, model, trial)
 
 @pytest.mark.parametrize('params, match', [
     ({'audio.sample_rate': 100.0}, 'audio.sample_rate'),
-    ({'audio.sample_rate': 44100}, 'audio.sample_rate.*decimal point'),
+    ({'audio.sample_rate': '44100'}, 'audio.sample_rate must be a float'),
     ({'audio.msg_type': 'sensor_msgs/msg/Image'}, 'audio.msg_type'),
     ({'audio.channels': 2, 'audio.channel': 2}, 'audio.channel=2'),
     ({'audio.stamp_source': 'header'}, 'audio.stamp_source'),
