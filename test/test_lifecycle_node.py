@@ -229,7 +229,7 @@ def test_release_only_while_active(manager_factory, trial):
 @pytest.mark.parametrize('params, reason', [
     ({'model.path': '/nonexistent/model.joblib'}, 'model.joblib does not exist'),
     ({'audio.stamp_source': 'header'}, "audio.stamp_source='header' needs a stamped"),
-    ({'wrench.rate': 150.0}, 'integer multiple'),
+    ({'wrench.rate': 20000.0}, 'outside'),
 ])
 def test_configure_fails_cleanly(manager_factory, params, reason):
     m = manager_factory(**params)

@@ -228,7 +228,7 @@ LOFO_SETTINGS = {
 
 
 def lofo_rules() -> List[DecisionRule]:
-    """The rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
     rules = [DEFAULT_RULE]
     rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
     rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
