@@ -38,6 +38,8 @@ setup(
         # 1.4.1.post1, joblib 1.3.2).
         'train': ['scikit-learn>=1.4,<2', 'joblib>=1.3,<2', 'skops>=0.10,<1'],
         'safe': ['skops>=0.10,<1'],
+        # decodes the recordings of the simulator's 'real_sounds' family (tools/fetch_sounds.sh)
+        'sounds': ['soundfile>=0.12,<1'],
         'test': ['pytest>=7', 'hypothesis>=6.80', 'flake8>=6', 'flake8-quotes>=3.3',
                  'pydocstyle>=6.3', 'psutil>=5.9'],
     },
