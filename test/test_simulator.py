@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -707,3 +708,38 @@ def test_real_sound_levels_are_sane(real_bank):
         gain = tr.params['mic_gain']
         assert 0.6 * d['contact_peak_fs'] * gain < peak
         assert peak < 1.3 * d['contact_peak_fs'] * gain + 6 * room + 0.03
+
+
+def test_sound_bank_cache_is_kept_when_complete_and_refused_when_not(real_bank, tmp_path):
+    copy = tmp_path / 'bank'
+    shutil.copytree(real_bank.folder, copy)
+    stamps = {f.name: f.stat().st_mtime_ns for f in copy.iterdir()}
+    # a complete cache: fetch neither downloads nor rewrites anything
+    assert sound_bank.fetch(dest=copy, quiet=True) == copy
+    assert {f.name: f.stat().st_mtime_ns for f in copy.iterdir()} == stamps
+    assert sound_bank.load_bank(folder=copy).fingerprint == real_bank.fingerprint
+    # a missing recording: the bank is unavailable, with the fetch command in the error
+    next(copy.glob('contact__*.wav')).unlink()
+    assert not sound_bank.bank_available(folder=copy)
+    with pytest.raises(ConfigError, match='tools/fetch_sounds.sh'):
+        sound_bank.load_bank(folder=copy)
+
+
+def test_sound_bank_clips_are_aligned_and_normalised(real_bank):
+    assert sum(len(real_bank.clips[r]) for r in sound_bank.ROLES) == sum(
+        len(v) for v in sound_bank.BANK.values())
+    for role in sound_bank.IMPULSE_ROLES:
+        for clip in real_bank.clips[role]:
+            x = np.abs(clip.data)
+            assert x.max() == pytest.approx(1.0)
+            # the onset is the first sample at 20 % of the peak, 1 ms into the clip at most
+            assert x[clip.onset] >= sound_bank.ONSET_FRACTION - 1e-9
+            assert np.all(x[:clip.onset] < sound_bank.ONSET_FRACTION)
+            assert clip.onset <= round(sound_bank.PRE_ROLL_S * clip.rate)
+            data, onset = real_bank.at_rate(clip, 16000)
+            assert onset == round(clip.onset * 16000 / clip.rate)
+            assert len(data) == pytest.approx(len(clip.data) * 16000 / clip.rate, abs=2)
+    for role in sound_bank.LOOP_ROLES:
+        for clip in real_bank.clips[role]:
+            assert np.sqrt(np.mean(clip.data ** 2)) == pytest.approx(1.0)
+            assert len(clip.data) / clip.rate >= 1.0
