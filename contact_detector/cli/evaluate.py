@@ -20,7 +20,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from contact_detector.cli.detect import build_detector_factory
+from contact_detector.cli.detect import (add_stream_arguments, build_detector_factory,
+                                         discover_all, read_node_params, stream_spec)
 from contact_detector.cli.train import conditions_of
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError, ContactDetectorError
@@ -28,6 +29,7 @@ from contact_detector.evaluation.baselines import BASELINES, make_baseline
 from contact_detector.evaluation.metrics import (frame_labels, frame_report, outcome_dicts,
                                                  score_trial, summarize_by_condition, Truth)
 from contact_detector.io.bags import find_bags
+from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 
 DETECTORS = ('forest',) + BASELINES
@@ -49,9 +51,14 @@ def truth_for(bag: Path, events, manifest: dict) -> Truth:
 
 def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spec: StreamSpec,
              audio_rate: float, wrench_rate: float,
-             label_window: Optional[dict] = None) -> Dict[str, dict]:
+             label_window: Optional[dict] = None,
+             found: Optional[Dict[Path, Streams]] = None,
+             stream: Optional[dict] = None) -> Dict[str, dict]:
     """
     Run every detector on every bag; return per-detector outcomes, summaries, frame reports.
+
+    ``found`` (bag -> discovered :class:`Streams`) replaces ``spec`` and the two rates per bag;
+    ``stream`` holds the parameter file's stream fields (the audio channel).
 
     Returns
     -------
@@ -63,10 +70,15 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     y_true, y_pred = [], []
     for bag in tqdm(bags, desc='evaluate', unit='bag', disable=len(bags) < 3):
+        streams = (found or {}).get(bag)
+        if streams is not None:
+            spec = stream_spec(streams, stream or {})
+            audio_rate, wrench_rate = streams.audio_rate, streams.wrench_rate
         events = load_events(bag, spec=spec)
         truth = truth_for(bag, events, manifest)
         for name in detectors:
-            detector = (make_forest() if name == 'forest' else
+            detector = ((make_forest(streams) if streams is not None else make_forest())
+                        if name == 'forest' else
                         make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate))
             run = run_detector(events, detector=detector)
             outcomes[name].append(score_trial(truth=truth, releases=run.releases,
@@ -161,9 +173,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='detector(s) to evaluate (repeatable; default forest)')
     parser.add_argument('--model', type=Path, default=None)
     parser.add_argument('--params', type=Path, default=None)
-    parser.add_argument('--audio-rate', type=float, default=None)
-    parser.add_argument('--wrench-topic', default='/wrist_wrench')
-    parser.add_argument('--audio-topic', default='/audio')
+    add_stream_arguments(parser)
     parser.add_argument('--report', type=Path, default=None)
     args = parser.parse_args(argv)
     chosen: List[str] = args.detector or ['forest']
@@ -172,12 +182,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                               audio_rate=args.audio_rate)
         probe = make()
-        spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic,
-                          **stream)
-        results = evaluate(bags=find_bags(args.bags), detectors=detectors, make_forest=make,
-                           spec=spec, audio_rate=probe.settings.audio_rate,
+        params = read_node_params(args.params) if args.params else {}
+        found = dict(discover_all(find_bags(args.bags), args=args, params=params,
+                                  prog='contact-detector evaluate'))
+        results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
+                           spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,
-                           label_window=probe.bundle.label_window)
+                           label_window=probe.bundle.label_window, found=found,
+                           stream=stream)
     except ContactDetectorError as err:
         print(f'contact-detector evaluate: {err}', file=sys.stderr)
         return 1

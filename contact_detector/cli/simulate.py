@@ -43,7 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--seed', type=int, default=0, metavar='S',
                         help='random seed (default 0); trial i uses default_rng([S, i])')
     parser.add_argument('--storage', choices=sorted(STORAGES), default='sqlite3',
-                        help='rosbag2 storage plugin (default sqlite3)')
+                        help='rosbag2 storage plugin, or ros1 for ROS 1 .bag files '
+                             '(default sqlite3)')
     parser.add_argument('--audio-rate', type=int, default=16000, metavar='HZ',
                         help='microphone sample rate (default 16000)')
     parser.add_argument('--ft-rate', type=float, default=100.0, metavar='HZ',

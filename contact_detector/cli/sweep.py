@@ -146,6 +146,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo-settings', default=','.join(LOFO_SETTINGS),
                         help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)})')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
+    parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
+                        help='--lofo: frames up to this long after the onset are labelled '
+                             f'contact, s (default {STATE.end_s})')
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
@@ -248,7 +251,8 @@ def lofo(args, spec) -> str:
                     'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
     for name in tqdm(args.lofo_settings.split(','), desc='lofo', unit='setting'):
         columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
-        setting = FeatureSetting(name, config, STATE, columns=tuple(columns))
+        setting = FeatureSetting(name, config, LabelWindow(0.0, args.lofo_label_end),
+                                 columns=tuple(columns))
         folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                      n_estimators=args.trees, seed=args.seed, jobs=args.jobs)
         for k, rule in enumerate(rules):

@@ -18,6 +18,7 @@ from typing import Optional, Sequence
 import numpy as np
 from tqdm import tqdm
 
+from contact_detector.cli.detect import add_stream_arguments, discover_all, stream_spec
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ContactDetectorError
@@ -25,6 +26,7 @@ from contact_detector.evaluation.metrics import score_trial, summarize, Truth
 from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig)
 from contact_detector.io.bags import find_bags
+from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
                                            save_bundle)
@@ -209,10 +211,19 @@ def n_table_markdown(split) -> str:
 
 
 def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec,
-                  audio_rate: float, wrench_rate: float, manifest: dict) -> dict:
-    """Run the full detector on held-out bags; return the event summary and per-trial rows."""
+                  audio_rate: float, wrench_rate: float, manifest: dict,
+                  found: Optional[dict] = None) -> dict:
+    """
+    Run the full detector on held-out bags; return the event summary and per-trial rows.
+
+    ``found`` (bag -> discovered Streams) replaces ``spec`` and the rates per bag.
+    """
     outcomes = []
     for bag in bags:
+        streams = (found or {}).get(bag)
+        if streams is not None:
+            spec = stream_spec(streams, {})
+            audio_rate, wrench_rate = streams.audio_rate, streams.wrench_rate
         events = load_events(bag, spec=spec)
         detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
             audio_rate=audio_rate, wrench_rate=wrench_rate))
@@ -247,10 +258,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
-    parser.add_argument('--audio-rate', type=float, default=16000.0)
-    parser.add_argument('--wrench-rate', type=float, default=100.0)
-    parser.add_argument('--wrench-topic', default='/wrist_wrench')
-    parser.add_argument('--audio-topic', default='/audio')
+    add_stream_arguments(parser)
     parser.add_argument('--no-events', action='store_true',
                         help='skip the event metrics on the test trials')
     add_feature_arguments(parser)
@@ -268,8 +276,9 @@ def _train(args: argparse.Namespace) -> int:
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
     rule = rule_from_args(args)
-    spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic)
-    bags = find_bags(args.bags)
+    found: dict[Path, Streams] = dict(discover_all(find_bags(args.bags), args=args, params={},
+                                                   prog='contact-detector train'))
+    bags = list(found)
     manifest = conditions_of(bags)
     csv_onsets = read_labels_csv(args.labels) if args.labels else None
     if csv_onsets is not None:
@@ -280,8 +289,10 @@ def _train(args: argparse.Namespace) -> int:
             return 1
 
     def one(bag):
-        return trial_features(bag=bag, config=config, spec=spec, audio_rate=args.audio_rate,
-                              wrench_rate=args.wrench_rate, label_window=labels,
+        streams = found[bag]
+        return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
+                              audio_rate=streams.audio_rate,
+                              wrench_rate=streams.wrench_rate, label_window=labels,
                               onsets=csv_onsets[bag.name] if csv_onsets else None,
                               condition=manifest.get(bag, {}).get('condition', ''))
 
@@ -307,7 +318,8 @@ def _train(args: argparse.Namespace) -> int:
     training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
                 'conditions': sorted({t.condition for t in trials}),
                 'test_trials': quoted.test_trials, 'seed': args.seed,
-                'audio_rate': args.audio_rate, 'wrench_rate': args.wrench_rate}
+                'audio_rate': sorted({s.audio_rate for s in found.values()}),
+                'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()})}
     bundle = ModelBundle(
         forest=quoted.forest, feature_config=config, feature_names=config.feature_names,
         feature_schema_version=FEATURE_SCHEMA_VERSION, label_window=labels.to_dict(),
@@ -318,8 +330,8 @@ def _train(args: argparse.Namespace) -> int:
     if not args.no_events:
         test_bags = [b for b in bags if b.name in set(quoted.test_trials)]
         metrics['events_test_trials'] = event_metrics(
-            bundle=bundle, bags=tqdm(test_bags, desc='events', unit='bag'), spec=spec,
-            audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, manifest=manifest)
+            bundle=bundle, bags=tqdm(test_bags, desc='events', unit='bag'), spec=StreamSpec(),
+            audio_rate=16000.0, wrench_rate=100.0, manifest=manifest, found=found)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     path = save_bundle(bundle=bundle, path=args.out, fmt=args.format, check_frames=x)
     print(f'model written to {path}')
