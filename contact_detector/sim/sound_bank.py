@@ -40,9 +40,8 @@ import sys
 import tempfile
 from typing import Sequence
 
-import numpy as np
-
 from contact_detector.errors import ConfigError
+import numpy as np
 
 #: Environment variable naming the cache folder.
 SOUNDS_ENV = 'CONTACT_DETECTOR_SOUNDS'
