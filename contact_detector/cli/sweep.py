@@ -217,6 +217,9 @@ _SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_m
 #: The feature settings --lofo compares: name -> columns (None: the shipped model's).
 LOFO_SETTINGS = {
     'shipped': None,
+    'round5': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
+        'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
+        'ft_change_angle', 'force_change_max', 'torque_change_max'),
     'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,

@@ -33,20 +33,24 @@ from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_ve
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
                                              trial_features)
 
-#: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
-#: sample with its mean removed, the twelve extra features, labels covering the first 0.3 s of
-#: the contact; release at the first frame where every tree says contact (p >= 0.95 with 10
-#: trees), or when the mean P(contact) of the last 15 frames reaches 0.3 (quiet contacts). The
-#: paper's settings (W160/H128, 7 features, 0.1 s labels) are one row of that table.
+#: The defaults chosen by leave-one-family-out (docs/generalisation.md): a 0.64 s F/T window
+#: updated at every sample with its mean removed; audio loudness relative to the room (dB above
+#: the noise floor, its recent peak, rise and gap); the change of |F| and |T| against a median
+#: baseline and its recent maximum; the orientation- and tare-free length of the force and
+#: torque vector change with its 0.1 s minimum and 0.5 s maximum. Labels cover the first 0.3 s
+#: of the contact; release at the first frame where every tree says contact (p >= 0.95 with 10
+#: trees), or when the mean P(contact) of the last 15 frames reaches 0.3.
 DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
                                  delta_window=1, delta_lag=5, rise_frames=2,
-                                 change_max_frames=50,
+                                 change_max_frames=50, shift_min_frames=10, shift_lag=20,
+                                 shift_window=40,
                                  extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
-                                                 'force_delta', 'torque_delta',
-                                                 'ft_delta_angle', 'force_change',
-                                                 'torque_change', 'ft_change_angle',
                                                  'audio_rise_db', 'audio_peak_gap_db',
-                                                 'force_change_max', 'torque_change_max'))
+                                                 'force_change', 'torque_change',
+                                                 'force_change_max', 'torque_change_max',
+                                                 'force_shift', 'torque_shift',
+                                                 'force_shift_min', 'torque_shift_min',
+                                                 'force_shift_max', 'torque_shift_max'))
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
 DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.3)
