@@ -6,7 +6,7 @@ The recordings are not part of the repository. :func:`fetch` takes them from Deb
 opengameart.org under CC0, CC BY 3.0 and CC BY-SA 3.0, see ``docs/simulator.md``): it runs
 ``apt-get download minetest-data`` (no root needed when the package lists are there; as root it
 runs ``apt-get update`` once if the download fails), unpacks the ``.deb`` with ``dpkg-deb -x``,
-decodes the Ogg Vorbis files of :data:`BANK` with ``soundfile`` (the ``sounds`` extra) and
+decodes the Ogg Vorbis files of :data:`BANK` with ``soundfile`` (a dependency) and
 writes each as a mono float32 WAV file plus ``bank.json`` into the cache folder
 (:func:`bank_dir`: ``$CONTACT_DETECTOR_SOUNDS`` or ``~/.cache/contact_detector/sounds``).
 It is idempotent: a complete cache is left as it is. ``tools/fetch_sounds.sh`` (called by
@@ -193,9 +193,8 @@ def fetch(*, dest: Path | None = None, quiet: bool = False) -> Path:
     try:
         import soundfile
     except ImportError as err:
-        raise ConfigError('decoding the real sound bank needs the soundfile package: '
-                          "pip install 'contact_detector[sounds]', then run "
-                          f'{FETCH_COMMAND}') from err
+        raise ConfigError('decoding the real sound bank needs the soundfile package '
+                          f'(pip install soundfile), then run {FETCH_COMMAND}') from err
     from scipy.io import wavfile
     folder.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix='contact_detector_sounds_') as tmp:
@@ -357,8 +356,8 @@ def load_bank(*, folder: Path | None = None) -> SoundBank:
     path = Path(folder) if folder is not None else bank_dir()
     if not _manifest_ok(path):
         raise ConfigError(f'the real sound bank is not in {path} (condition set '
-                          f"'real_sounds'); run {FETCH_COMMAND} (needs apt-get and the "
-                          f"'sounds' extra) or set {SOUNDS_ENV} to a fetched bank")
+                          f"'real_sounds'); run {FETCH_COMMAND} (needs apt-get and soundfile) or "
+                          f'set {SOUNDS_ENV} to a fetched bank')
     return _load(str(path.resolve()))
 
 
