@@ -31,7 +31,8 @@ setup(
         'matplotlib>=3.6,<4',
         'tqdm>=4.60,<5',
         'PyYAML>=6,<7',
-        # mp3 audio in bags (libsndfile >= 1.1 with mpg123/LAME, bundled in the wheels).
+        # mp3 audio in bags (libsndfile >= 1.1 with mpg123/LAME, bundled in the wheels); decodes
+        # the simulator's real sound bank (tools/fetch_sounds.sh).
         'soundfile>=0.12,<1',
         # libyaml parser for ruamel.yaml: rosbags parses every rosbag2 metadata.yaml with it
         # (pure Python: ~50 ms a bag, a third of detect's time on a 10 s bag).

@@ -32,7 +32,8 @@ def build_parser() -> argparse.ArgumentParser:
                     'as rosbag2 plus a JSON manifest.',
         epilog=f'Condition sets: {sets}. Aliases: all: the six original sets (paper to '
                f'odd_chunking); families: the six families (geometry to quiet_contact); wide: '
-               f'all twelve. Trial i uses condition i mod len(conditions); within a set the '
+               f'those twelve. real_sounds (recorded sounds) needs tools/fetch_sounds.sh '
+               f'first. Trial i uses condition i mod len(conditions); within a set the '
                f'exogenous hits cycle hand, table, none (exogenous: mixed, touch, brush, '
                f'setdown).')
     parser.add_argument('out_dir', metavar='OUT_DIR', type=Path,
