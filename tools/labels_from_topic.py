@@ -28,7 +28,7 @@ OFF = (False, 0, '0', '', 'false', 'False')
 
 
 def onsets(bag: Path, *, topic: str, field: str) -> list:
-    """Times (s) at which ``field`` of ``topic`` turns on (module docstring)."""
+    """Return the times (s) at which ``field`` of ``topic`` turns on (module docstring)."""
     out, was_on = [], False
     for message in iter_messages(bag, topics=[topic]):
         value = message.msg
