@@ -3,13 +3,15 @@
 # for each bag in DIR, train on the others (alone, and with N simulated trials) and evaluate
 # the model on the bag left out, forest and baselines.
 #
-#   benchmarks/leave_one_out.sh DIR LABELS.csv OUT [N_SIM]
+#   benchmarks/leave_one_out.sh DIR LABELS.csv OUT [N_SIM [TRAIN_OPTION...]]
 #
+# TRAIN_OPTIONs go to every train run (e.g. --trees 10 to skip the n_estimators search).
 # OUT/<bag>/{alone,sim}.npz and evaluate reports OUT/<bag>/{alone,sim}/; the per-recording
 # tables are collected in OUT/summary.md. The simulated trials are written once into
 # OUT/sim (train reuses them for every fold).
 set -euo pipefail
 dir=$1 labels=$2 out=$3 nsim=${4:-60}
+shift 4 || shift $#
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd_bin=${CONTACT_DETECTOR:-$here/.venv/bin/contact-detector}
 mkdir -p "$out"
@@ -26,8 +28,8 @@ for bag in $bags; do
   for kind in alone sim; do
     extra=()
     [ "$kind" = sim ] && extra=(--with-sim "$nsim" --sim-dir "$out/sim")
-    "$cd_bin" train "$fold/train" --labels "$labels" "${extra[@]}" --out "$fold/$kind.npz" \
-      --no-events > "$fold/$kind.train.log" 2>&1
+    "$cd_bin" train "$fold/train" --labels "$labels" "${extra[@]}" "$@" \
+      --out "$fold/$kind.npz" --no-events > "$fold/$kind.train.log" 2>&1
     "$cd_bin" evaluate "$dir/$bag" --labels "$labels" --model "$fold/$kind.npz" \
       --detector all --report "$fold/$kind" > "$fold/$kind.eval.log" 2>&1
     {

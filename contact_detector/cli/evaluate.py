@@ -100,7 +100,7 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
                         make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate))
             run = run_detector(events, detector=detector)
             if truth is None:
-                outcomes[name].extend(score_onsets(name=bag.name, condition='',
+                outcomes[name].extend(score_onsets(name=bag.name, condition='labels',
                                                    onsets=onsets, events=run.events))
             else:
                 outcomes[name].append(score_trial(truth=truth, releases=run.releases,
