@@ -121,9 +121,14 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
     assert sorted(p.name for p in sim.glob('trial_*')) == [f'trial_000{i}' for i in range(3)]
     capsys.readouterr()
     # The kept trials are reused; a folder holding other trials is refused.
+    # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same)
+    manifest = json.loads((sim / 'manifest.json').read_text())
+    manifest['settings']['ft_rate'] = 124.6
+    (sim / 'manifest.json').write_text(json.dumps(manifest))
     assert train_cli.main([*args, '--with-sim', '3', '--sim-dir', str(sim),
                            '--no-events']) == 0
     assert 'reusing 3 simulated trials' in capsys.readouterr().out
+    assert load_bundle(path=model).training['sources']['simulated']['ft_rate'] == 124.6
     assert train_cli.main([*args, '--with-sim', '4', '--sim-dir', str(sim)]) == 1
     assert 'holds other simulated trials' in capsys.readouterr().err
     # Alone: the recordings only, and a temporary folder leaves nothing behind.

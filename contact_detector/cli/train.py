@@ -6,9 +6,10 @@
 Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with rows
 ``bag,onset_start,onset_end``, several rows for a recording with several contacts); features
 from the same streaming core the node runs. ``--with-sim N`` adds N simulated trials of the
-``wide`` condition sets (all twelve simulator families, at the recordings' F/T and audio
-rates, labelled by the simulator's truth) to the recordings: in a temporary directory, or in
-``--sim-dir`` to keep them (a folder that already holds those N trials is reused). The model
+``wide`` condition sets (all twelve simulator families, at the recordings' F/T rate to 1 Hz
+and audio rate, labelled by the simulator's truth) to the recordings: in a temporary
+directory, or in ``--sim-dir`` to keep them (a folder that already holds those N trials is
+reused). The model
 card's ``training.sources`` records what the model was trained on. The report directory gets
 ``summary.md``, ``metrics.json`` and PNG figures (confusion matrix, ROC curve, feature
 importance). The saved model is the trial-split forest refit on train + validation.
@@ -314,7 +315,8 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float,
     Raises
     ------
     BagError
-        ``sim_dir`` holds other simulator output (other trials, seed or rates).
+        ``sim_dir`` holds other simulator output (other trials, seed or audio rate, or an F/T
+        rate more than 1 % away: one recording more or less moves the median a little).
 
     """
     settings = {'seed': seed, 'trials': n, 'start_index': 0,
@@ -324,11 +326,13 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float,
     manifest = sim_dir / 'manifest.json'
     if manifest.exists():
         held = json.loads(manifest.read_text())
-        if held.get('settings') != settings:
+        have = dict(held.get('settings', {}))
+        same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
+        if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
             raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
                            'give an empty or new --sim-dir')
         print(f'contact-detector train: reusing {n} simulated trials in {sim_dir}')
-        return [sim_dir / t['bag'] for t in held['trials']], settings
+        return [sim_dir / t['bag'] for t in held['trials']], held['settings']
     trials = simulate_trials(n=n, seed=seed, conditions=SIM_CONDITIONS, audio_rate=audio_rate,
                              ft_rate=ft_rate)
     records, _ = write_trials(trials=tqdm(trials, total=n, desc='simulate', unit='trial'),
@@ -376,7 +380,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             return 1
     sim_bags, sim_settings = [], {}
     if args.with_sim:
-        ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()]), 1))
+        ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))
         audio_rate = int(max(found.values(), key=lambda s: s.audio_rate).audio_rate)
         print(f'contact-detector train: {args.with_sim} simulated trials of '
               f'{", ".join(SIM_CONDITIONS)} at {ft_rate:g} Hz F/T, {audio_rate} Hz audio')
