@@ -8,8 +8,8 @@
 # TRAIN_OPTIONs go to every train run (e.g. --trees 10 to skip the n_estimators search).
 # OUT/<bag>/{alone,sim}.npz and evaluate reports OUT/<bag>/{alone,sim}/; the per-recording
 # tables are collected in OUT/summary.md. The simulated trials are written once into
-# OUT/sim (train reuses them for every fold). A fold already evaluated is kept (the script
-# resumes); delete OUT to start again.
+# OUT/sim (train reuses them for every fold). A model already trained is kept (the script
+# resumes, and evaluates again); delete OUT to start again.
 set -euo pipefail
 dir=$1 labels=$2 out=$3 nsim=${4:-60}
 shift 4 || shift $#
@@ -27,14 +27,14 @@ for bag in $bags; do
     [ "$other" = "$bag" ] || ln -s "$(cd "$dir" && pwd)/$other" "$fold/train/$other"
   done
   for kind in alone sim; do
-    if ! grep -q '^| ' "$fold/$kind.eval.log" 2>/dev/null; then
+    if [ ! -s "$fold/$kind.npz" ]; then
       extra=()
       [ "$kind" = sim ] && extra=(--with-sim "$nsim" --sim-dir "$out/sim")
       "$cd_bin" train "$fold/train" --labels "$labels" "${extra[@]}" "$@" \
         --out "$fold/$kind.npz" --no-events > "$fold/$kind.train.log" 2>&1
-      "$cd_bin" evaluate "$dir/$bag" --labels "$labels" --model "$fold/$kind.npz" \
-        --detector all --report "$fold/$kind" > "$fold/$kind.eval.log" 2>&1
     fi
+    "$cd_bin" evaluate "$dir/$bag" --labels "$labels" --model "$fold/$kind.npz" \
+      --detector all --report "$fold/$kind" > "$fold/$kind.eval.log" 2>&1
     {
       echo; echo "## $bag, trained on the others ($kind)"; echo
       grep '^|' "$fold/$kind.eval.log" | tail -n 3

@@ -149,8 +149,8 @@ def recording_table(results: Dict[str, dict]) -> str:
     One markdown row per recording: each detector's verdicts on its labelled contacts.
 
     A cell reads ``caught/contacts`` (detected within [-10, +500] ms of the label), then the
-    early (premature), late and missed counts where not zero, and the median latency of the
-    caught ones.
+    early (premature) and late counts with their median release - label time, and the missed
+    count, where not zero, and the median latency of the caught ones.
     """
     names = list(results)
     per: Dict[str, Dict[str, list]] = {}
@@ -167,9 +167,13 @@ def recording_table(results: Dict[str, dict]) -> str:
             count = {v: sum(o['verdict'] == v for o in rows)
                      for v in ('detected', 'premature', 'late', 'missed')}
             text = f"{count['detected']}/{len(rows)}"
-            extra = [f'{count[v]} {word}' for v, word in (('premature', 'early'),
-                                                          ('late', 'late'),
-                                                          ('missed', 'missed')) if count[v]]
+            extra = []
+            for verdict, word in (('premature', 'early'), ('late', 'late'), ('missed', 'missed')):
+                if count[verdict]:
+                    off = [1000 * o['latency_s'] for o in rows
+                           if o['verdict'] == verdict and o['latency_s'] is not None]
+                    extra.append(f'{count[verdict]} {word}'
+                                 + (f' {np.median(off):+.0f} ms' if off else ''))
             caught = [1000 * o['latency_s'] for o in rows if o['verdict'] == 'detected']
             if extra:
                 text += ' (' + ', '.join(extra) + ')'
