@@ -80,6 +80,10 @@ def test_evaluate_takes_the_labels_csv_as_truth(recordings, tmp_path, capsys):
     for o, ref in zip(shifted['forest'], by_csv['forest']):
         if ref['release_t'] is not None:
             assert o['verdict'] == 'premature'
+            assert o['latency_s'] == pytest.approx(ref['latency_s'] - 3.0)
+    # ... and the per-recording table says by how much (release - label, ms)
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith('| trial')]
+    assert any(' early -29' in row or ' early -30' in row for row in rows)
     summary = (tmp_path / 'csv' / 'summary.md').read_text()
     assert '## Per recording' in summary and (tmp_path / 'csv' / 'recordings.png').stat().st_size
 
