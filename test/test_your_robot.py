@@ -138,6 +138,11 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
     # Alone: the recordings only, and a temporary folder leaves nothing behind.
     assert train_cli.main([*args, '--no-events']) == 0
     assert set(load_bundle(path=model).training['sources']) == {'recordings'}
+    # Too few recordings for the split by recording: a clear error, not a traceback.
+    one = sorted(recordings['onsets'])[0]
+    capsys.readouterr()
+    assert train_cli.main([str(recordings['bags'] / one), *args[1:]]) == 1
+    assert 'needs at least 3 recordings, got 1' in capsys.readouterr().err
 
 
 def test_labels_from_a_topic_and_a_recording_cut_per_contact(recordings, tmp_path):

@@ -45,6 +45,8 @@ from contact_detector.sim.trial import simulate_trials
 
 #: Condition sets of the simulated trials ``--with-sim`` adds.
 SIM_CONDITIONS = ('wide',)
+#: Recordings (and simulated trials) the split by recording needs: one per set at least.
+MIN_RECORDINGS = 3
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
 #: sample with its mean removed, the twelve extra features, labels covering the first 0.3 s of
@@ -391,6 +393,11 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             wrench_topic=None, audio_topic=None, audio_rate=None, wrench_rate=None,
             audio_coding=None), params={}, prog='contact-detector train'))
     bags = list(found)
+    if len(bags) < MIN_RECORDINGS:
+        raise BagError(f'train splits by recording into training, validation and test sets and '
+                       f'needs at least {MIN_RECORDINGS} recordings, got {len(bags)}: add '
+                       'recordings, cut a long one into one bag per contact '
+                       '(tools/split_recording.py) or add simulated trials (--with-sim N)')
     manifest = conditions_of(bags)
     user = set(user_bags)
 
