@@ -11,7 +11,7 @@ from contact_detector.cli import detect as detect_cli
 from contact_detector.errors import ConfigError
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.messages import check_audio_info
-from contact_detector.io.mp3 import LAME_DELAY, mp3_frames
+from contact_detector.io.mp3 import LAME_DELAY, mp3_format, mp3_frames
 from contact_detector.io.sensor_stream import AudioEvent, load_events, WrenchEvent
 from test_discovery import AD, AI, ROS_DRIVERS_MSGS, store_with, wrench_series, write_bag
 
@@ -120,3 +120,26 @@ def test_the_live_node_keeps_refusing_mp3_and_names_the_fix():
               coding_format='mp3')
     with pytest.raises(ConfigError, match='format:=wave'):
         check_audio_info(info)
+
+
+@pytest.mark.parametrize('rate, tagged, kind', [(16000, False, 'ros1'), (44100, True, 'sqlite3')])
+def test_mp3_without_audio_info_is_found_from_its_frame_headers(tmp_path, rate, tagged, kind):
+    store = store_with(kind, ROS_DRIVERS_MSGS)
+    raw = mp3_stream(rate, tagged=tagged)
+    messages = (audio_messages(store, raw, rate, piece=500)
+                + wrench_series(store, rate=125.0, seconds=2.0, start_ns=T_START_NS))
+    bag = write_bag(tmp_path / ('b.bag' if kind == 'ros1' else 'b'), kind, store, messages)
+    found = discover_streams(bag)
+    assert (found.coding, found.audio_rate, found.channels) == ('mp3', rate, 1)
+    assert found.audio_rate_source == 'mp3 header' and not found.warnings
+    events = load_events(bag, spec=detect_cli.stream_spec(found, {}))
+    assert abs(click_time(events) - (T_START_NS * 1e-9 + CLICK_S)) < 1e-3
+
+
+def test_pcm_bytes_are_not_taken_for_mp3():
+    rng = np.random.default_rng(3)
+    for pcm in (rng.normal(0, 3000, 8000).astype('<i2').tobytes(),
+                np.zeros(8000, '<i2').tobytes(),
+                np.full(8000, -1, '<i2').tobytes()):
+        assert mp3_format(pcm) is None
+    assert mp3_format(mp3_stream(16000)) == (16000.0, 1)

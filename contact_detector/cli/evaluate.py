@@ -1,14 +1,21 @@
 """``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
 
     contact-detector evaluate BAG_OR_DIR... [--detector forest|threshold|highpass|
-                              lowpass-bandpass|audio-onset|all ...] [--model M] [--report DIR]
+                              lowpass-bandpass|audio-onset|all ...] [--model M]
+                              [--labels labels.csv] [--report DIR]
 
 Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), missed, late,
 premature (before the onset: the object is dropped), latency, and contact events blamed on
 exogenous impacts (within [-50, +500] ms of an impact, outside the true contact). Ground truth
-comes from the simulator's ``manifest.json`` beside the bags (onset, lift-off, impacts,
-condition) or, without one, from ``/contact_truth`` (onset only). Every detector sees the same
-decoded messages. With ``--report``: summary.md, metrics.json, per-trial rows and figures.
+comes from ``--labels`` (the CSV ``train --labels`` takes: ``bag,onset_start,onset_end`` rows,
+several rows for a recording with several contacts), else the simulator's ``manifest.json``
+beside the bags (onset, lift-off, impacts, condition), else ``/contact_truth`` (onset only).
+A recording with several labelled contacts is scored per contact, as if the detector were
+re-armed for each (:func:`contact_detector.evaluation.metrics.score_onsets`). Every detector
+sees the same decoded messages. The per-recording table (printed with ``--labels``) gives each
+detector's verdicts on each recording. With ``--report``: summary.md, metrics.json,
+per-trial rows, a latency histogram and ``recordings.png`` (each recording's labelled onsets
+and every detector's contact events on one time line).
 """
 
 import argparse
@@ -27,12 +34,16 @@ from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError, ContactDetectorError
 from contact_detector.evaluation.baselines import BASELINES, make_baseline
 from contact_detector.evaluation.metrics import (frame_labels, frame_report, outcome_dicts,
-                                                 score_trial, summarize_by_condition, Truth)
+                                                 score_onsets, score_trial,
+                                                 summarize_by_condition, Truth)
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
+from contact_detector.model.training import read_labels_csv
 
 DETECTORS = ('forest',) + BASELINES
+#: recordings drawn in recordings.png at most
+MAX_FIGURE_RECORDINGS = 40
 
 
 def truth_for(bag: Path, events, manifest: dict) -> Truth:
@@ -53,21 +64,26 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
              audio_rate: float, wrench_rate: float,
              label_window: Optional[dict] = None,
              found: Optional[Dict[Path, Streams]] = None,
-             stream: Optional[dict] = None) -> Dict[str, dict]:
+             stream: Optional[dict] = None,
+             labels: Optional[Dict[str, List[float]]] = None) -> Dict[str, dict]:
     """
     Run every detector on every bag; return per-detector outcomes, summaries, frame reports.
 
     ``found`` (bag -> discovered :class:`Streams`) replaces ``spec`` and the two rates per bag;
-    ``stream`` holds the parameter file's stream fields (the audio channel).
+    ``stream`` holds the parameter file's stream fields (the audio channel); ``labels`` (bag
+    name -> onsets, s, from :func:`read_labels_csv`) is the truth where given, every onset
+    scored (:func:`score_onsets`).
 
     Returns
     -------
     dict
-        detector -> {'outcomes': [...], 'summary': {...}, 'frames': {...} (forest only)}
+        detector -> {'outcomes': [...], 'summary': {...}, 'recordings': {name: {'onsets',
+        'events', 't0', 't1'}}, 'frames': {...} (forest only)}
 
     """
     manifest = conditions_of(bags)
     outcomes: Dict[str, list] = {d: [] for d in detectors}
+    recordings: Dict[str, dict] = {d: {} for d in detectors}
     y_true, y_pred = [], []
     for bag in tqdm(bags, desc='evaluate', unit='bag', disable=len(bags) < 3):
         streams = (found or {}).get(bag)
@@ -75,24 +91,35 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
             spec = stream_spec(streams, stream or {})
             audio_rate, wrench_rate = streams.audio_rate, streams.wrench_rate
         events = load_events(bag, spec=spec)
-        truth = truth_for(bag, events, manifest)
+        onsets = (labels or {}).get(bag.name)
+        truth = None if onsets else truth_for(bag, events, manifest)
+        onsets = onsets or [truth.onset_t]
         for name in detectors:
             detector = ((make_forest(streams) if streams is not None else make_forest())
                         if name == 'forest' else
                         make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate))
             run = run_detector(events, detector=detector)
-            outcomes[name].append(score_trial(truth=truth, releases=run.releases,
-                                              events=run.events))
+            if truth is None:
+                outcomes[name].extend(score_onsets(name=bag.name, condition='labels',
+                                                   onsets=onsets, events=run.events))
+            else:
+                outcomes[name].append(score_trial(truth=truth, releases=run.releases,
+                                                  events=run.events))
+            recordings[name][bag.name] = {
+                'onsets': sorted(onsets), 'events': [float(t) for t in run.events],
+                't0': float(run.t[0]) if run.t.size else min(onsets),
+                't1': float(run.t[-1]) if run.t.size else max(onsets)}
             if name == 'forest' and label_window:
                 keep = run.valid
-                y_true.append(frame_labels(t=run.t[keep], onsets=[truth.onset_t],
+                y_true.append(frame_labels(t=run.t[keep], onsets=onsets,
                                            start_s=label_window['start_s'],
                                            end_s=label_window['end_s']))
                 y_pred.append(run.contact[keep].astype(int))
     results = {}
     for name in detectors:
         results[name] = {'outcomes': outcome_dicts(outcomes[name]),
-                         'summary': summarize_by_condition(outcomes[name])}
+                         'summary': summarize_by_condition(outcomes[name]),
+                         'recordings': recordings[name]}
     if y_true:
         yt, yp = np.concatenate(y_true), np.concatenate(y_pred)
         text, report = frame_report(y_true=yt, y_pred=yp)
@@ -115,6 +142,90 @@ def comparison_table(results: Dict[str, dict]) -> str:
                      f"{ms(s['latency_ms_p95'])} | {ms(s['latency_ms_max'])} | "
                      f"{s['impact_events']} |")
     return '\n'.join(lines)
+
+
+def recording_table(results: Dict[str, dict]) -> str:
+    """
+    One markdown row per recording: each detector's verdicts on its labelled contacts.
+
+    A cell reads ``caught/contacts`` (detected within [-10, +500] ms of the label), then the
+    early (premature) and late counts with their median release - label time, and the missed
+    count, where not zero, and the median latency of the caught ones.
+    """
+    names = list(results)
+    per: Dict[str, Dict[str, list]] = {}
+    for name, result in results.items():
+        for o in result['outcomes']:
+            recording = o.get('extra', {}).get('recording', o['name'])
+            per.setdefault(recording, {n: [] for n in names})[name].append(o)
+    lines = ['| recording | contacts | ' + ' | '.join(names) + ' |',
+             '|---|---|' + '---|' * len(names)]
+    for recording, by_detector in per.items():
+        cells = []
+        for name in names:
+            rows = by_detector[name]
+            count = {v: sum(o['verdict'] == v for o in rows)
+                     for v in ('detected', 'premature', 'late', 'missed')}
+            text = f"{count['detected']}/{len(rows)}"
+            extra = []
+            for verdict, word in (('premature', 'early'), ('late', 'late'), ('missed', 'missed')):
+                if count[verdict]:
+                    off = [1000 * o['latency_s'] for o in rows
+                           if o['verdict'] == verdict and o['latency_s'] is not None]
+                    extra.append(f'{count[verdict]} {word}'
+                                 + (f' {np.median(off):+.0f} ms' if off else ''))
+            caught = [1000 * o['latency_s'] for o in rows if o['verdict'] == 'detected']
+            if extra:
+                text += ' (' + ', '.join(extra) + ')'
+            if caught:
+                text += f', {np.median(caught):.0f} ms'
+            cells.append(text)
+        n = len(by_detector[names[0]]) if names else 0
+        lines.append(f'| {recording} | {n} | ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines)
+
+
+def plot_recordings(*, path: Path, results: Dict[str, dict]) -> int:
+    """
+    Draw each recording's labelled onsets and every detector's contact events; return the count.
+
+    One row per recording (at most :data:`MAX_FIGURE_RECORDINGS`), time from the recording's
+    first decision; black lines are the labels, markers the contact events (a release when
+    the detector is armed), shaded the [-10, +500] ms window that counts as caught.
+    """
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from contact_detector.evaluation.metrics import LATE_S, ONSET_TOLERANCE_S
+
+    names = list(results)
+    bags = list(next(iter(results.values()))['recordings'])[:MAX_FIGURE_RECORDINGS] \
+        if names else []
+    if not bags:
+        return 0
+    fig, axes = plt.subplots(len(bags), 1, figsize=(8, 0.9 + 0.45 * len(names) * len(bags)),
+                             squeeze=False)
+    markers = 'ovs^Dx'
+    for ax, bag in zip(axes[:, 0], bags):
+        info = results[names[0]]['recordings'][bag]
+        t0 = info['t0']
+        for onset in info['onsets']:
+            ax.axvspan(onset - ONSET_TOLERANCE_S - t0, onset + LATE_S - t0, color='0.9')
+            ax.axvline(onset - t0, color='k', lw=1)
+        for i, name in enumerate(names):
+            events = np.asarray(results[name]['recordings'][bag]['events']) - t0
+            ax.plot(events, np.full(events.size, i), markers[i % len(markers)], ms=5,
+                    label=name)
+        ax.set_yticks(range(len(names)), names, fontsize=7)
+        ax.set_ylim(-0.7, len(names) - 0.3)
+        ax.set_xlim(0, info['t1'] - t0)
+        ax.set_title(bag, fontsize=8, loc='left')
+    axes[-1, 0].set_xlabel('time from the first decision [s]; black: label, grey: caught '
+                           'window')
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return len(bags)
 
 
 def condition_table(result: dict) -> str:
@@ -140,7 +251,13 @@ def write_report(*, report: Path, results: Dict[str, dict]) -> None:
          for name, r in results.items()}, indent=2))
     (report / 'trials.json').write_text(json.dumps(
         {name: r['outcomes'] for name, r in results.items()}, indent=2))
-    lines = ['# Evaluation', '', comparison_table(results), '']
+    lines = ['# Evaluation', '', comparison_table(results), '', '## Per recording', '',
+             recording_table(results), '']
+    drawn = plot_recordings(path=report / 'recordings.png', results=results)
+    if drawn:
+        total = len(next(iter(results.values()))['recordings'])
+        lines += ['![recordings](recordings.png)' + (
+            f' (the first {drawn} of {total} recordings)' if drawn < total else ''), '']
     for name, result in results.items():
         lines += [f'## {name} by condition', '', condition_table(result), '']
     if 'frames' in results.get('forest', {}):
@@ -174,6 +291,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--model', type=Path, default=None)
     parser.add_argument('--params', type=Path, default=None)
     add_stream_arguments(parser)
+    parser.add_argument('--labels', type=Path, default=None,
+                        help='CSV of bag,onset_start,onset_end rows (the truth; several rows '
+                             'for a recording with several contacts)')
     parser.add_argument('--report', type=Path, default=None)
     args = parser.parse_args(argv)
     chosen: List[str] = args.detector or ['forest']
@@ -185,15 +305,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         params = read_node_params(args.params) if args.params else {}
         found = dict(discover_all(find_bags(args.bags), args=args, params=params,
                                   prog='contact-detector evaluate'))
+        labels = read_labels_csv(args.labels) if args.labels else None
+        if labels is not None:
+            missing = [b.name for b in found if b.name not in labels]
+            if missing:
+                raise BagError(f'{args.labels} has no onset for {", ".join(missing[:5])}'
+                               + (' ...' if len(missing) > 5 else ''))
         results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,
                            label_window=probe.bundle.label_window, found=found,
-                           stream=stream)
+                           stream=stream, labels=labels)
     except ContactDetectorError as err:
         print(f'contact-detector evaluate: {err}', file=sys.stderr)
         return 1
     print(comparison_table(results))
+    if args.labels:
+        print()
+        print(recording_table(results))
     if args.report:
         write_report(report=args.report, results=results)
         print(f'report written to {args.report}/summary.md')

@@ -15,8 +15,7 @@ from typing import Sequence
 from tqdm import tqdm
 
 from contact_detector.errors import ContactDetectorError
-from contact_detector.sim.bag_writer import (manifest_entry, STORAGES, write_manifest,
-                                             write_trial_bag)
+from contact_detector.sim.bag_writer import STORAGES, write_trials
 from contact_detector.sim.conditions import ALIASES, CONDITION_SETS, resolve_conditions
 from contact_detector.sim.trial import simulate_trial, simulate_trials
 
@@ -99,20 +98,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(str(err))
     try:
         _prepare(args.out_dir, overwrite=args.overwrite)
-        records = []
         trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window)
-        for trial in tqdm(trials, total=args.trials, desc='simulate', unit='trial',
-                          disable=args.quiet):
-            write_trial_bag(trial=trial, path=args.out_dir / trial.name, storage=args.storage)
-            records.append(manifest_entry(trial))
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
                     'chunk_size': args.chunk_size, 'label_window_s': args.label_window}
-        manifest = write_manifest(trials=records, out_dir=args.out_dir, settings=settings)
+        records, manifest = write_trials(
+            trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
+                        disable=args.quiet),
+            out_dir=args.out_dir, storage=args.storage, settings=settings)
     except ContactDetectorError as err:
         print(f'{PROG}: error: {err}', file=sys.stderr)
         return 1

@@ -4,9 +4,10 @@
 * Audio topic: the one topic of a supported audio type (:data:`AUDIO_MSG_TYPES`).
 * Audio format, first found of: the command's flag; the bag's own description, an
   ``audio_common_msgs/msg/AudioInfo`` topic (ros-drivers: rate, channels, coding ``wave`` or
-  ``mp3``) or the format every mgonzs13 ``AudioStamped`` carries; the node's parameter file;
-  else an estimate: samples per second of recording (bag log) time, snapped to the nearest
-  standard rate (:data:`STANDARD_AUDIO_RATES`), with a warning.
+  ``mp3``) or the format every mgonzs13 ``AudioStamped`` carries; for ``AudioData`` without
+  ``AudioInfo``, the mp3 frame headers when its bytes are mp3 (:func:`sniff_mp3`); the
+  node's parameter file; else an estimate: samples per second of recording (bag log) time,
+  snapped to the nearest standard rate (:data:`STANDARD_AUDIO_RATES`), with a warning.
 * F/T rate: the command's flag, else the mean period of the regular steps of the header stamps
   (:func:`measure_wrench_rate`).
 
@@ -30,6 +31,7 @@ from contact_detector.io.cdr import FAST_DECODERS
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_to_samples, check_audio_info,
                                           embedded_audio_format, normalise_msg_type,
                                           wrench_sample)
+from contact_detector.io.mp3 import mp3_format
 
 WRENCH_TYPE = 'geometry_msgs/msg/WrenchStamped'
 AUDIO_INFO_TYPE = 'audio_common_msgs/msg/AudioInfo'
@@ -39,6 +41,10 @@ STANDARD_AUDIO_RATES = (8000.0, 11025.0, 16000.0, 22050.0, 32000.0, 44100.0, 480
 PROBE_MESSAGES = 500
 #: Seconds of audio (log time) used to estimate an audio rate.
 PROBE_SECONDS = 5.0
+#: AudioData messages read to tell mp3 from PCM when no AudioInfo says.
+SNIFF_MESSAGES = 8
+#: The audio type whose bytes may be mp3.
+MP3_CAPABLE_TYPE = 'audio_common_msgs/msg/AudioData'
 
 
 @dataclass(frozen=True)
@@ -55,8 +61,8 @@ class Streams:
     audio_rate : float
         Audio sample rate, Hz.
     audio_rate_source : str
-        Where it comes from: ``flag``, ``AudioInfo``, ``AudioStamped``, ``parameters`` or
-        ``estimated``.
+        Where it comes from: ``flag``, ``AudioInfo``, ``AudioStamped``, ``mp3 header``,
+        ``parameters`` or ``estimated``.
     channels : int
         Interleaved audio channels.
     coding : str
@@ -200,6 +206,22 @@ def estimate_audio_rate(*, sizes: Sequence[int], times: Sequence[float], path: P
     return float(sum(sizes[1:]) / (times[-1] - times[0]))
 
 
+def sniff_mp3(path: Path, *, topic: str) -> Optional[tuple[float, int]]:
+    """
+    ``(rate, channels)`` if the first :data:`SNIFF_MESSAGES` messages of ``topic`` are mp3.
+
+    For ``AudioData`` without ``AudioInfo`` (audio_common records mp3 by default, and
+    ``rosbag record`` of the audio topic alone leaves the info out): the mp3 frame headers
+    carry the sample rate and channel mode (:func:`contact_detector.io.mp3.mp3_format`).
+    """
+    chunks = []
+    for message in iter_messages(path, topics=[topic]):
+        chunks.append(bytes(getattr(message.msg, 'data', b'')))
+        if len(chunks) >= SNIFF_MESSAGES:
+            break
+    return mp3_format(b''.join(chunks))
+
+
 def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
                      audio_topic: Optional[str] = None, audio_msg_type: Optional[str] = None,
                      audio_rate: Optional[float] = None, wrench_rate: Optional[float] = None,
@@ -227,7 +249,8 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
     channels : int or None
         Interleaved audio channels (parameter file), used when the bag does not say.
     coding : str or None
-        ``pcm`` or ``mp3`` (flag); None = from AudioInfo, else ``pcm``.
+        ``pcm`` or ``mp3`` (flag); None = from AudioInfo, else from the bytes of AudioData
+        (mp3 frame headers), else ``pcm``.
 
     Raises
     ------
@@ -275,6 +298,10 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
                 raise BagError(f'{path}: {a_topic}: {err}') from err
             rate, n_ch, source = fmt.sample_rate, fmt.channels, 'AudioStamped'
             break
+    if found_coding is None and coding is None and a_type == MP3_CAPABLE_TYPE:
+        sniffed = sniff_mp3(path, topic=a_topic)
+        if sniffed is not None:
+            rate, n_ch, found_coding, source = sniffed + ('mp3', 'mp3 header')
     n_ch = n_ch or channels or 1
     found_coding = coding or found_coding or 'pcm'
     if audio_rate:

@@ -78,6 +78,43 @@ def mp3_frames(raw: bytes) -> list:
     return frames
 
 
+def mp3_format(raw: bytes) -> tuple[float, int] | None:
+    """
+    Sample rate (Hz) and channels of a byte stream that is mp3, else None.
+
+    The bytes are mp3 when Layer III frames of one sample rate follow each other from the
+    first frame (at most 64 bytes of anything, e.g. an ID3 tag start, before it) and cover at
+    least 90 % of the bytes after it: PCM samples almost never chain frame headers like that.
+    Used for ``AudioData`` without ``AudioInfo``, whose coding the bag does not say.
+
+    Parameters
+    ----------
+    raw : bytes
+        The first bytes of the stream (a few messages).
+
+    Returns
+    -------
+    (float, int) or None
+        ``(rate, channels)`` from the first frame header (channel mode 3 = mono).
+
+    """
+    frames = mp3_frames(raw)
+    if len(frames) < 2 or frames[0][0] > 64:
+        return None
+    chained = sum(size for (start, size, _), (nxt, _, _) in zip(frames, frames[1:])
+                  if start + size == nxt)
+    if chained + frames[-1][1] < 0.9 * (len(raw) - frames[0][0]):
+        return None
+    rates = set()
+    for start, _, _ in frames:
+        b1, b2 = raw[start + 1], raw[start + 2]
+        rates.add(_RATES[(b1 >> 3) & 3][(b2 >> 2) & 3])
+    if len(rates) != 1:
+        return None
+    mode = raw[frames[0][0] + 3] >> 6
+    return float(rates.pop()), 1 if mode == 3 else 2
+
+
 def decode_mp3(*, chunks: Sequence[bytes], log_t: Sequence[float],
                channel: int | None = None) -> Mp3Audio:
     """

@@ -279,3 +279,21 @@ def write_manifest(*, trials: Iterable[Trial | Mapping], out_dir: Path,
     except (OSError, ValueError) as err:
         raise BagError(f'cannot write manifest {file}: {err}') from err
     return file
+
+
+def write_trials(*, trials: Iterable[Trial], out_dir: Path, storage: str = 'sqlite3',
+                 settings: Mapping | None = None) -> tuple[list, Path]:
+    """
+    Write each trial's bag into ``out_dir`` and then the manifest of them all.
+
+    Returns
+    -------
+    (list of dict, Path)
+        The manifest records (:func:`manifest_entry`) and the manifest file.
+
+    """
+    records = []
+    for trial in trials:
+        write_trial_bag(trial=trial, path=Path(out_dir) / trial.name, storage=storage)
+        records.append(manifest_entry(trial))
+    return records, write_manifest(trials=records, out_dir=out_dir, settings=settings)
