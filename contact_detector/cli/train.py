@@ -31,7 +31,7 @@ from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
                                            save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
-                                             trial_features)
+                                             trial_features, unlabelled_bags)
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
 #: sample with its mean removed, the twelve extra features, labels covering the first 0.3 s of
@@ -282,6 +282,8 @@ def _train(args: argparse.Namespace) -> int:
     manifest = conditions_of(bags)
     csv_onsets = read_labels_csv(args.labels) if args.labels else None
     if csv_onsets is not None:
+        skipped = unlabelled_bags(args.labels)
+        bags = [b for b in bags if b.name in csv_onsets or b.name not in skipped]
         missing = [b.name for b in bags if b.name not in csv_onsets]
         if missing:
             print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
