@@ -48,7 +48,7 @@ def main() -> int:
             if row and row['onset_start'] else np.inf
         by_family.setdefault(trial['condition'], []).append(err)
     every = [e for errs in by_family.values() for e in errs]
-    print(f'| family | trials | median ms | p99 ms | max ms | within 20 ms |')
+    print('| family | trials | median ms | p99 ms | max ms | within 20 ms |')
     print('|---|---|---|---|---|---|')
     for name, errs in [*by_family.items(), ('all', every)]:
         e = np.asarray(errs)

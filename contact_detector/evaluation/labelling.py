@@ -1,4 +1,4 @@
-"""
+r"""
 Hindsight labelling: propose a recording's contact onset from its whole F/T and audio.
 
 Pure numpy/scipy (no ROS, no rosbags): arrays in, a :class:`Proposal` out. Unlike the node,
@@ -13,23 +13,32 @@ which must decide causally, this sees the whole recording and works in three ste
    ``E > level`` lasting at least ``min_lasting_s`` are candidates; the one with the largest
    area ``sum E dt`` is the contact (a touch or a brush is shorter and smaller; the retreat
    returns to ``w_ref`` and is the end of the same run).
-2. **Where the F/T leaves its baseline.** The pre-event baseline ``b`` is the median of ``w``
-   over ``pre_s`` before the run, ``u`` the unit direction of the change, and
-   ``y_j = (w_j - b) . u`` the load change along it. A hinge is fitted by least squares to
-   ``y`` from ``fit_pre_s`` before the run until ``y`` first reaches ``fit_frac`` of the
-   run's level: ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, where ``g_p`` is the ramp
-   ``(t - t0)_+^p`` (p = 1: a stiff contact; p = 2: a compliant one) averaged over the
-   sample's period ``(t_j - dt, t_j]`` (the sensor's ADC average),
+2. **Where the F/T leaves its baseline.** Walking back from the run's start to where ``E``
+   falls to its floor gives the pre-event baseline ``b``: the median of ``w`` over ``pre_s``
+   before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
+   the load change along it and ``sigma_y`` its MAD-based standard deviation in the baseline.
+   Searching backwards from where ``y`` reaches ``fit_frac`` of the change, sample ``m`` is the
+   first after the latest run of ``quiet_s`` with every ``|y| <= k_sigma sigma_y`` (a dip
+   after an impact spike does not stop the search; an isolated noise sample does not either
+   unless a whole quiet run precedes it). If ``y`` then reaches ``rise_k k_sigma sigma_y``
+   within ``fast_samples`` samples (a stiff contact) the onset is the middle of sample
+   ``m``'s averaging period, ``t_m - dt / 2``. Otherwise (a soft or compliant contact, whose
+   load rises slowly) a hinge ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, is fitted by least
+   squares from ``fit_pre_s`` before ``m`` to that level, where ``g_p`` is the ramp
+   ``(t - t0)_+^p`` (p = 1 or 2) averaged over the sample's period ``(t_j - dt, t_j]`` (the
+   sensor's ADC average),
 
-   .. math:: g_p(t_j; t_0) = \\frac{(t_j - t_0)_+^{p+1} - (t_j - dt - t_0)_+^{p+1}}{(p+1)\\,dt}
+   .. math:: g_p(t_j; t_0) = \frac{(t_j - t_0)_+^{p+1} - (t_j - dt - t_0)_+^{p+1}}{(p+1)\,dt}
 
-   ``t0`` is searched on a grid of ``dt / 20`` (sub-sample resolution), ``c, a`` solved in
-   closed form, and the ``(p, t0)`` with the least squared residual wins.
+   and ``t0`` is searched in ``[t_m - back_samples dt, t_m]`` on a grid of ``dt / 20``
+   (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
+   winning.
 3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared
    with its noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame
    in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
-   floor, and whose next frames stay above it, marks a sound; its onset is the first sample
-   in that frame or the one before with ``|x| > audio_k * rms_noise``. A sound sets the
+   floor, with the mean of it and the next three frames above ``audio_hold`` times that,
+   marks a sound; its onset is the first sample in that frame or the one before with
+   ``|x - median| > audio_k * sigma_noise`` (MAD-based). A sound sets the
    time (audio has sample resolution); the sound's travel time from the hand to the
    microphone is unknown and not removed.
 
@@ -69,16 +78,28 @@ class LabelSettings:
     pre_s : float
         Pre-event baseline window before the run's start.
     fit_pre_s : float
-        The hinge fit starts this long before the point where ``E`` left its floor.
+        The hinge fit starts this long (at least 12 samples) before sample ``m``.
     fit_frac : float
-        The hinge fit ends where the change along ``u`` first reaches this fraction of the
-        run's level.
+        The backward search starts where ``y`` first reaches this fraction of the change.
+    k_sigma : float
+        Baseline band in robust standard deviations of ``y``.
+    quiet_s : float
+        Length of the quiet run (at least 3 samples) that ends the backward search.
+    rise_k : float
+        A rise to ``rise_k * k_sigma`` sigmas within ``fast_samples`` samples is fast.
+    fast_samples : int
+        See ``rise_k``.
+    back_samples : float
+        The hinge's onset is searched up to this many sample periods before ``t_m``.
     audio_lo_s, audio_hi_s : float
         Window around the F/T onset where a contact sound may start.
     frame_s : float
         Audio power frame.
     audio_rise : float
-        Power ratio over the noise floor that marks a sound (10 = +10 dB).
+        Power ratio over the noise floor that marks a sound (5 = +7 dB).
+    audio_hold : float
+        The mean power of that frame and the next three must exceed ``audio_hold *
+        audio_rise``.
     audio_k : float
         Sample threshold in robust noise standard deviations for the sound's first sample.
 
@@ -91,13 +112,16 @@ class LabelSettings:
     pre_s: float = 0.3
     fit_pre_s: float = 0.1
     fit_frac: float = 0.5
-    k_sigma: float = 5.0
+    k_sigma: float = 3.5
+    quiet_s: float = 0.07
+    back_samples: float = 2.0
     rise_k: float = 3.0
     fast_samples: int = 2
     audio_lo_s: float = -0.05
     audio_hi_s: float = 0.03
     frame_s: float = 0.002
-    audio_rise: float = 10.0
+    audio_rise: float = 5.0
+    audio_hold: float = 0.8
     audio_k: float = 5.0
 
 
@@ -259,8 +283,8 @@ def audio_onset(*, audio: np.ndarray, rate: float, t0: float, around: float,
     n_win = max(1, (w1 - w0) // fl)
     ratio = float(power[:n_win + 1].max()) if len(power) else 0.0
     hot = power > s.audio_rise
-    for k in range(min(n_win, len(power) - 2)):
-        if hot[k] and hot[k + 1] and power[k + 2] > 0.5 * s.audio_rise:
+    for k in range(min(n_win, len(power) - 4)):
+        if hot[k] and power[k:k + 4].mean() > s.audio_hold * s.audio_rise:
             med = np.median(noise)
             sd = max(1.4826 * float(np.median(np.abs(noise - med))), 1e-12)
             a = max(w0 + (k - 1) * fl, 0)
@@ -326,9 +350,10 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     order = np.argsort(areas)[::-1]
     a, b = runs[int(order[0])]
     clarity = 1.0 - (areas[int(order[1])] / areas[int(order[0])] if len(runs) > 1 else 0.0)
-    # back to where the shift left its floor (before the run's start)
-    floor = float(np.median(shift[max(0, a - int(s.pre_s / dt)):a])) if a > 0 else 0.0
-    floor_lvl = floor + 0.1 * (level - floor)
+    # back to where the shift left its floor (the recording's typical shift)
+    floor = float(np.median(shift))
+    spread = 1.4826 * float(np.median(np.abs(shift - floor)))
+    floor_lvl = floor + min(max(4.0 * spread, 1.0), 0.1 * (level - floor))
     i = a
     while i > 0 and shift[i - 1] > floor_lvl:
         i -= 1
@@ -343,21 +368,25 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     sd = max(1.4826 * float(np.median(np.abs(base_y - np.median(base_y)))), 1e-9)
     target = max(s.fit_frac * float(np.linalg.norm(change)), s.k_sigma * sd)
     reach = np.nonzero(y[i:b] >= target)[0]
-    m = i + (int(reach[0]) if len(reach) else 0)
-    while m > j1 and y[m - 1] > s.k_sigma * sd:
-        m -= 1
-    # fast rise (the level within fast_samples): the first sample that left the baseline
-    # holds the onset within its averaging period; slow rise: a hinge fit extrapolates back
+    r = i + (int(reach[0]) if len(reach) else 0)
+    # the latest sample ending a run of n_quiet samples within k_sigma of the baseline: the
+    # next one is the first that left it (short dips after an impact do not stop the search)
+    n_quiet = max(3, int(round(s.quiet_s / dt)))
+    quiet = np.convolve((y[:r + 1] > s.k_sigma * sd).astype(float), np.ones(n_quiet),
+                        mode='full')[:r + 1] == 0
+    quiet[:n_quiet - 1] = False
+    ends = np.nonzero(quiet)[0]
+    m = int(ends[-1]) + 1 if len(ends) else max(r, 1)
+    # fast rise: the onset is within the averaging period of sample m (its middle); slow
+    # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
+    ft_onset = float(t[m]) - 0.5 * dt
     level_hi = min(s.rise_k * s.k_sigma * sd, 0.5 * float(np.linalg.norm(change)))
     above = np.nonzero(y[m:b] >= level_hi)[0]
     e = m + (int(above[0]) if len(above) else 0)
-    if e - m < s.fast_samples:
-        ft_onset = float(t[m]) - 0.5 * dt
-    else:
-        n_fit = max(12, int(round(s.fit_pre_s / dt)))
-        k_start = max(0, m - n_fit)
-        ft_onset, _p, _sse = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
-                                       lo=float(t[k_start]), hi=float(t[m]))
+    if e - m >= s.fast_samples:
+        k_start = max(0, m - max(12, int(round(s.fit_pre_s / dt))))
+        ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
+                             lo=float(t[m]) - s.back_samples * dt, hi=float(t[m]))[0]
     confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
     onset, source, a_on = ft_onset, 'ft', None
     if audio is not None and audio_rate and audio_t0 is not None and len(audio):
