@@ -32,7 +32,10 @@ which must decide causally, this sees the whole recording and works in three ste
 
    and ``t0`` is searched in ``[t_m - back_samples dt, t_m]`` on a grid of ``dt / 20``
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
-   winning.
+   winning. On a busy baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times
+   the sensor's noise, where the ``k_sigma`` band is late by the oscillation's size) a linear
+   hinge through the ``busy_back_s`` before ``m`` up to where the search started sets ``t0``
+   anywhere in that span.
 3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared
    with its noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame
    in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
@@ -91,6 +94,11 @@ class LabelSettings:
         See ``rise_k``.
     back_samples : float
         The hinge's onset is searched up to this many sample periods before ``t_m``.
+    busy_sigma : float
+        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is busy.
+    busy_back_s : float
+        On a busy baseline, a linear hinge through ``busy_back_s`` before ``m`` up to where
+        the search started sets the onset, anywhere in that span.
     audio_lo_s, audio_hi_s : float
         Window around the F/T onset where a contact sound may start.
     frame_s : float
@@ -115,6 +123,8 @@ class LabelSettings:
     k_sigma: float = 3.5
     quiet_s: float = 0.07
     back_samples: float = 2.0
+    busy_sigma: float = 4.0
+    busy_back_s: float = 0.3
     rise_k: float = 3.0
     fast_samples: int = 2
     audio_lo_s: float = -0.05
@@ -383,7 +393,13 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     level_hi = min(s.rise_k * s.k_sigma * sd, 0.5 * float(np.linalg.norm(change)))
     above = np.nonzero(y[m:b] >= level_hi)[0]
     e = m + (int(above[0]) if len(above) else 0)
-    if e - m >= s.fast_samples:
+    if sd > s.busy_sigma:
+        # a busy baseline (ripple, slosh: many times the sensor noise): the k_sigma search
+        # is late by up to the oscillation's size; a ramp fitted through it averages it out
+        k_start = max(0, m - int(round(s.busy_back_s / dt)))
+        ft_onset = hinge_fit(t=t[k_start:r + 1], y=y[k_start:r + 1], dt=dt,
+                             lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
+    elif e - m >= s.fast_samples:
         k_start = max(0, m - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
                              lo=float(t[m]) - s.back_samples * dt, hi=float(t[m]))[0]
