@@ -43,13 +43,15 @@ which must decide causally, this sees the whole recording and works in three ste
    marks a sound; its onset is the first sample in that frame or the one before with
    ``|x - median| > audio_k * sigma_noise`` (MAD-based). A sound sets the
    time (audio has sample resolution); the sound's travel time from the hand to the
-   microphone is unknown and not removed.
+   microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
+   which are found late rather than early, the window starts at ``audio_slow_lo_s``.
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
 found near the F/T onset, else 0.8.
 """
 
+import dataclasses
 from dataclasses import dataclass, field
 import math
 from typing import Optional
@@ -101,6 +103,8 @@ class LabelSettings:
         the search started sets the onset, anywhere in that span.
     audio_lo_s, audio_hi_s : float
         Window around the F/T onset where a contact sound may start.
+    audio_slow_lo_s : float
+        ``audio_lo_s`` after a slow or busy rise.
     frame_s : float
         Audio power frame.
     audio_rise : float
@@ -128,6 +132,7 @@ class LabelSettings:
     rise_k: float = 3.0
     fast_samples: int = 2
     audio_lo_s: float = -0.05
+    audio_slow_lo_s: float = -0.15
     audio_hi_s: float = 0.03
     frame_s: float = 0.002
     audio_rise: float = 5.0
@@ -403,11 +408,15 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         k_start = max(0, m - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
                              lo=float(t[m]) - s.back_samples * dt, hi=float(t[m]))[0]
+    slow = sd > s.busy_sigma or e - m >= s.fast_samples
     confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
     onset, source, a_on = ft_onset, 'ft', None
     if audio is not None and audio_rate and audio_t0 is not None and len(audio):
+        # a slow or busy rise is found late rather than early: look further back for its sound
+        lo = s.audio_slow_lo_s if slow else s.audio_lo_s
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
-                                   around=ft_onset, settings=s)
+                                   around=ft_onset,
+                                   settings=dataclasses.replace(s, audio_lo_s=lo))
         if a_on is not None:
             onset, source = a_on, 'audio'
         else:
