@@ -44,7 +44,8 @@ which must decide causally, this sees the whole recording and works in three ste
    ``|x - median| > audio_k * sigma_noise`` (MAD-based). A sound sets the
    time (audio has sample resolution); the sound's travel time from the hand to the
    microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
-   which are found late rather than early, the window starts at ``audio_slow_lo_s``.
+   which are found late rather than early, the window starts at ``audio_slow_lo_s``; after
+   a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``.
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
@@ -104,7 +105,8 @@ class LabelSettings:
     audio_lo_s, audio_hi_s : float
         Window around the F/T onset where a contact sound may start.
     audio_slow_lo_s : float
-        ``audio_lo_s`` after a slow or busy rise.
+        ``audio_lo_s`` after a slow or busy rise; after a fast one it is at most two sample
+        periods.
     frame_s : float
         Audio power frame.
     audio_rise : float
@@ -413,7 +415,9 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     onset, source, a_on = ft_onset, 'ft', None
     if audio is not None and audio_rate and audio_t0 is not None and len(audio):
         # a slow or busy rise is found late rather than early: look further back for its sound
-        lo = s.audio_slow_lo_s if slow else s.audio_lo_s
+        # after a fast rise the F/T onset is good to a sample: a sound starting much earlier
+        # is something else (a clatter, a knock)
+        lo = s.audio_slow_lo_s if slow else max(s.audio_lo_s, -2.0 * dt)
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
                                    around=ft_onset,
                                    settings=dataclasses.replace(s, audio_lo_s=lo))
