@@ -39,7 +39,7 @@ from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
                                            save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
-                                             trial_features)
+                                             trial_features, unlabelled_bags)
 from contact_detector.sim.bag_writer import write_trials
 from contact_detector.sim.trial import simulate_trials
 
@@ -380,6 +380,8 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     user_bags = list(found)
     csv_onsets = read_labels_csv(args.labels) if args.labels else None
     if csv_onsets is not None:
+        skipped = unlabelled_bags(args.labels)
+        user_bags = [b for b in user_bags if b.name in csv_onsets or b.name not in skipped]
         missing = [b.name for b in user_bags if b.name not in csv_onsets]
         if missing:
             print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
