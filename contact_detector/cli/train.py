@@ -382,6 +382,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     if csv_onsets is not None:
         skipped = unlabelled_bags(args.labels)
         user_bags = [b for b in user_bags if b.name in csv_onsets or b.name not in skipped]
+        found = {b: found[b] for b in user_bags}     # bags label could not label are left out
         missing = [b.name for b in user_bags if b.name not in csv_onsets]
         if missing:
             print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
