@@ -1,4 +1,19 @@
-"""Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
 
 A 10-tree forest is a noisy estimator: the same recipe trained with another random seed moves
 the count of premature releases on 360 held-out trials by several, so one trained forest cannot
@@ -34,8 +49,6 @@ import argparse
 from dataclasses import replace
 from typing import Dict, List
 
-import numpy as np
-
 from contact_detector.cli.sweep import decode
 from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS
 from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
@@ -44,6 +57,7 @@ from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_forest,
                                           score_rules)
+import numpy as np
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')

@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Model bundle: save/load round trips, the model card, and every refusal of load_bundle."""
 
 import hashlib
@@ -6,18 +20,17 @@ from pathlib import Path
 import pickle
 from typing import Callable
 
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.model import (DecisionRule, default_model_path, load_bundle, ModelBundle,
+                                    runtime_versions, save_bundle)
+from contact_detector.model.bundle import card_paths, find_model, JOBLIB_PROTOCOL
 import joblib
 import numpy as np
 import pytest
 import sklearn
 from sklearn.ensemble import RandomForestClassifier
 from sklearn.preprocessing import StandardScaler
-
-from contact_detector.errors import ConfigError, ModelError
-from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
-from contact_detector.model import (DecisionRule, default_model_path, load_bundle, ModelBundle,
-                                    runtime_versions, save_bundle)
-from contact_detector.model.bundle import card_paths, find_model, JOBLIB_PROTOCOL
 
 CONFIG = FeatureConfig(extra_features=('force_delta',))
 

@@ -1,4 +1,19 @@
-"""The live node in-process, with real rclpy: topics, services, parameters, bad input, time.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The live node in-process, with real rclpy: topics, services, parameters, bad input, time.
 
 Every test gets its own rclpy context. Messages go through DDS (loopback, see conftest.py);
 time is simulated (``use_sim_time``, the test publishes ``/clock`` like ``ros2 bag play
@@ -15,8 +30,16 @@ import sys
 import time
 
 from builtin_interfaces.msg import Time
+from contact_detector.detection.detector import ContactDetector
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.model.bundle import load_bundle
+from contact_detector.ros.executor import HotPathExecutor
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.ros.params import PARAMS
+from contact_detector.sim.trial import simulate_trial
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+import node_support
 import numpy as np
 import pytest
 import rclpy
@@ -29,15 +52,6 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Int16MultiArray
 from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
-
-from contact_detector.detection.detector import ContactDetector
-from contact_detector.errors import ConfigError, ModelError
-from contact_detector.model.bundle import load_bundle
-from contact_detector.ros.executor import HotPathExecutor
-from contact_detector.ros.node import ContactDetectorNode
-from contact_detector.ros.params import PARAMS
-from contact_detector.sim.trial import simulate_trial
-import node_support
 
 TICK_S = 0.01              # /clock period of the simulated bag player
 TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
@@ -250,7 +264,7 @@ def test_trial_frames_and_single_release(harness_factory, model, trial):
 @pytest.mark.parametrize('executor', ['single', 'hot_path'])
 def test_arm_and_reset_services(harness_factory, trial, executor):
     h = harness_factory(executor=executor, **{'release.armed_on_start': False})
-    span = dict(t_from=trial.onset_t - 1.5, t_to=trial.onset_t + 0.5)
+    span = {'t_from': trial.onset_t - 1.5, 't_to': trial.onset_t + 0.5}
     h.feed(trial, node_support.trial_events(trial, **span))
     h.flush_outputs()
     counts = h.node.detector_counts()

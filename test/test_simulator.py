@@ -1,11 +1,21 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Tests of the simulator: determinism, truth, stop rule, phases, bags, hits, condition sets."""
 
 import json
 from pathlib import Path
-
-import numpy as np
-import pytest
-from rosbags.highlevel import AnyReader
 
 from contact_detector.cli.plot import main as plot_main
 from contact_detector.cli.simulate import main as simulate_main
@@ -17,6 +27,9 @@ from contact_detector.sim.conditions import (CONDITION_SETS, get_condition, rang
                                              resolve_conditions)
 from contact_detector.sim.trial import (G, PHASES, simulate_trial, simulate_trials,
                                         STOP_TORQUE_NM)
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
 
 SEED = 5
 ALL = tuple(CONDITION_SETS)

@@ -1,4 +1,19 @@
-"""``contact-detector train``: train the contact forest the paper's way and write its report.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector train``: train the contact forest the paper's way and write its report.
 
     contact-detector train BAG_OR_DIR... --out models/contact_forest.joblib --report DIR
 
@@ -15,10 +30,6 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from joblib import delayed, Parallel
-import numpy as np
-from tqdm import tqdm
-
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ContactDetectorError
@@ -31,6 +42,9 @@ from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_ve
                                            save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
                                              trial_features)
+from joblib import delayed, Parallel
+import numpy as np
+from tqdm import tqdm
 
 #: The defaults chosen by the sweep (docs/sweep.md): a 0.64 s F/T window updated at every
 #: sample with its mean removed, the twelve extra features, labels covering the first 0.3 s of

@@ -1,4 +1,19 @@
-"""The model bundle: a trained forest plus everything needed to use it correctly.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The model bundle: a trained forest plus everything needed to use it correctly.
 
 A bundle is saved as two or three files side by side::
 
@@ -30,16 +45,15 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 import warnings
 import zipfile
 
-import joblib
-import numpy as np
-import sklearn
-from sklearn.ensemble import RandomForestClassifier
-
 import contact_detector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.model.compiled_forest import (CompiledForest, DEFAULT_CODEGEN_DEPTH,
                                                     forest_content_sha256)
+import joblib
+import numpy as np
+import sklearn
+from sklearn.ensemble import RandomForestClassifier
 
 #: Version of the payload dict inside model files and of the card layout.
 PAYLOAD_VERSION = 1
