@@ -40,9 +40,6 @@ import tempfile
 import time
 from typing import Callable, List, Optional, Sequence
 
-import numpy as np
-from sklearn.ensemble import RandomForestClassifier
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from contact_detector.features.config import (  # noqa: E402
@@ -50,6 +47,8 @@ from contact_detector.features.config import (  # noqa: E402
 from contact_detector.model import (  # noqa: E402
     CompiledForest, load_bundle, ModelBundle, runtime_versions, save_bundle)
 from contact_detector.model.compiled_forest import check_same_as_sklearn  # noqa: E402
+import numpy as np  # noqa: E402
+from sklearn.ensemble import RandomForestClassifier  # noqa: E402
 
 
 def synthetic_frames(*, n: int, n_features: int, seed: int) -> tuple:

@@ -50,8 +50,6 @@ import tempfile
 import time
 from typing import List, Optional, Sequence
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from contact_detector.cli import detect as detect_cli  # noqa: E402
@@ -64,6 +62,7 @@ from contact_detector.model.bundle import default_model_path  # noqa: E402
 from contact_detector.sim.bag_writer import (manifest_entry, write_manifest,  # noqa: E402
                                              write_trial_bag)
 from contact_detector.sim.trial import simulate_trials  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def emit(*lines: str) -> None:

@@ -52,8 +52,6 @@ import time
 import tracemalloc
 from typing import Callable, Iterator, List, Optional
 
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / 'test'))
@@ -62,6 +60,7 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.model.bundle import load_bundle, ModelBundle  # noqa: E402
 from contact_detector.sim.conditions import CONDITION_SETS  # noqa: E402
 from contact_detector.sim.trial import simulate_trial  # noqa: E402
+import numpy as np  # noqa: E402
 
 PAGE = os.sysconf('SC_PAGE_SIZE')
 MB = 1024.0 * 1024.0

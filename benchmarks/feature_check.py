@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""
+r"""
 Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
 
 A 10-tree forest is a noisy estimator: the same recipe trained with another random seed moves
@@ -41,7 +41,7 @@ noisy and gain, train on the other condition sets of the training folder and the
 held-out folder, and test on that condition's trials of the *other* held-out folders; round 4's
 features against the shipped ones, slow path at 0.5 and 0.3.
 
-    python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
+    python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
 """
 
@@ -92,7 +92,7 @@ def feature_settings() -> List[FeatureSetting]:
 
 
 def feature_rules() -> List[DecisionRule]:
-    """The round-1 default, the shipped rule and its faster and stricter neighbours."""
+    """Return the round-1 default, the shipped rule and its faster and stricter neighbours."""
     slow = {'sustain_frames': 15, 'sustain_threshold': 0.5}
     return [DecisionRule(threshold=0.7, confirm_frames=2),
             DecisionRule(threshold=0.85, **slow),
@@ -101,7 +101,7 @@ def feature_rules() -> List[DecisionRule]:
 
 
 def sustain_rules() -> List[DecisionRule]:
-    """The slow path (quiet contacts) with lower thresholds and a longer mean."""
+    """Return the slow path (quiet contacts) with lower thresholds and a longer mean."""
     return [replace(ROUND2_RULE, sustain_threshold=0.5),
             replace(ROUND2_RULE, sustain_threshold=0.4),
             replace(ROUND2_RULE, sustain_threshold=0.3),

@@ -51,15 +51,17 @@ def forest() -> RandomForestClassifier:
 
 
 def _bundle(forest: RandomForestClassifier, **overrides: object) -> ModelBundle:
-    fields = dict(forest=forest, feature_config=CONFIG, feature_names=CONFIG.feature_names,
-                  feature_schema_version=FEATURE_SCHEMA_VERSION,
-                  label_window={'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
-                  decision_rule=DecisionRule(threshold=0.6, confirm_frames=2, refractory_s=0.5),
-                  versions=runtime_versions(),
-                  training={'n_frames': 1500, 'trials': ('a', 'b'), 'n_estimators_auc':
-                            {str(n): 0.9 + n / 100 for n in range(1, 5)}},
-                  metrics={'roc_auc': np.float64(0.97), 'undefined': float('nan')},
-                  created='2026-03-01T12:00:00+00:00')
+    fields = {
+        'forest': forest, 'feature_config': CONFIG, 'feature_names': CONFIG.feature_names,
+        'feature_schema_version': FEATURE_SCHEMA_VERSION,
+        'label_window': {'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
+        'decision_rule': DecisionRule(threshold=0.6, confirm_frames=2, refractory_s=0.5),
+        'versions': runtime_versions(),
+        'training': {'n_frames': 1500, 'trials': ('a', 'b'), 'n_estimators_auc':
+                     {str(n): 0.9 + n / 100 for n in range(1, 5)}},
+        'metrics': {'roc_auc': np.float64(0.97), 'undefined': float('nan')},
+        'created': '2026-03-01T12:00:00+00:00',
+    }
     fields.update(overrides)
     return ModelBundle(**fields)
 
@@ -141,6 +143,7 @@ def test_tampered_file_is_refused_before_unpickling(saved: Path, tmp_path: Path)
     marker = tmp_path / 'pwned'
 
     class Exploit:
+
         def __reduce__(self) -> tuple:
             return (open, (str(marker), 'w'))
 

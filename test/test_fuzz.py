@@ -79,7 +79,7 @@ ALLOWED = (InputError, ConfigError)
 
 @pytest.fixture(scope='module')
 def bundle(tmp_path_factory):
-    """A real (tiny) forest on random features, saved and loaded through model/bundle.py."""
+    """Return a real (tiny) forest on random features, saved and loaded through model/bundle.py."""
     config = FeatureConfig()
     rng = np.random.default_rng(0)
     x = rng.normal(0.0, 1.0, (400, config.n_features))
@@ -493,7 +493,7 @@ def junk():
 
 
 def field(plausible):
-    """A field's value: usually plausible, sometimes junk, sometimes missing."""
+    """Return a field's value: usually plausible, sometimes junk, sometimes missing."""
     return st.one_of(plausible, plausible, junk(), st.just(MISSING))
 
 

@@ -54,7 +54,7 @@ from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 TICK_S = 0.01              # /clock period of the simulated bag player
-TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
 
 
 @pytest.fixture(scope='module')
@@ -211,7 +211,7 @@ def harness_factory(context, model):
 
 
 def offline_run(model, trial, fed, **settings):
-    """The same arrays and stamps through ContactDetector directly (no ROS)."""
+    """Run the same arrays and stamps through ContactDetector directly (no ROS)."""
     bundle = load_bundle(path=model)
     from contact_detector.detection.detector import DetectorSettings
     det = ContactDetector(bundle=bundle, settings=DetectorSettings(
@@ -535,7 +535,7 @@ def test_float32_audio_with_nan_is_dropped(harness_factory, trial):
 
 
 def big_endian_wrench(t: float, values) -> bytes:
-    """A WrenchStamped in big-endian CDR (what io.cdr does not read; rclpy does)."""
+    """Return a WrenchStamped in big-endian CDR (what io.cdr does not read; rclpy does)."""
     frame = b'wrist_ft_sensor_frame\x00'
     head = struct.pack('>iII', stamp(t).sec, stamp(t).nanosec, len(frame)) + frame
     return b'\x00\x00\x00\x00' + head + bytes(-len(head) % 8) + struct.pack('>6d', *values)

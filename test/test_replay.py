@@ -53,7 +53,7 @@ def _replay_command(*args) -> list:
 
 @pytest.fixture(scope='module')
 def bag(tmp_path_factory) -> Path:
-    """The first SPAN_S seconds of a simulated trial (wrench and audio, no truth yet)."""
+    """Return the first SPAN_S seconds of a simulated trial (wrench and audio, no truth yet)."""
     root = tmp_path_factory.mktemp('replay')
     full = write_trial_bag(trial=simulate_trial(seed=5, index=0), path=root / 'full')
     short = root / 'short'

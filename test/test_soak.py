@@ -33,11 +33,11 @@ import linecache
 from pathlib import Path
 import sys
 
-import node_support
-import pytest
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
+
 from bench_soak import make_pool, run_soak  # noqa: E402
+import node_support  # noqa: E402
+import pytest  # noqa: E402
 
 
 @pytest.fixture(scope='module')

@@ -40,6 +40,8 @@ differs in anything else is dropped and reported. The steps, in order:
 4. ament_copyright: a file without a copyright notice gets ``Copyright <YEAR>
    contact_detector developers`` and the Apache-2.0 notice as a comment block, after any
    shebang or coding line, exactly as ``ament_copyright --add-missing`` writes it.
+5. A005 (flake8-builtins): a module named like a standard library module (the subpackage
+   ``contact_detector.io``) gets a ``# noqa: A005`` first line.
 
 What it cannot fix (D401 imperative mood, D417, lines too long, ...) the linters still report:
 run ``.venv/bin/python -m pytest test/test_flake8.py test/test_pep257.py test/test_copyright.py``.
@@ -47,6 +49,7 @@ run ``.venv/bin/python -m pytest test/test_flake8.py test/test_pep257.py test/te
 
 import argparse
 import ast
+import hashlib
 import io
 import os
 from pathlib import Path
@@ -116,9 +119,13 @@ def _next_line(content: str, index: int) -> int:
     return index + 2 if content[index:index + 2] == '\r\n' else index + 1
 
 
+def _is_comment(content: str, index: int) -> bool:
+    return content[index:index + 1] == '#' or content[index:index + 2] == '//'
+
+
 def _past_shebang_and_coding(content: str) -> int:
     index = 0
-    while index < len(content) and content[index] == '#':
+    while index < len(content) and _is_comment(content, index):
         line = content[index:_next_line(content, index)]
         if not (line.startswith('#!') or 'coding=' in line or 'coding:' in line):
             break
@@ -133,15 +140,16 @@ def _past_empty_lines(content: str, index: int) -> int:
 
 
 def _comment_block(content: str, index: int) -> str | None:
-    match = re.compile('^(#)', re.MULTILINE).search(content, index)
+    match = re.compile('^(#|///|//)', re.MULTILINE).search(content, index)
     if not match:
         return None
+    token = match.group(1)
     start = end = match.start(1)
     while True:
         end = _next_line(content, end)
-        if content[end:end + 1] != '#':
+        if content[end:end + len(token)] != token:
             break
-    return '\n'.join(line[2:] for line in content[start:end].splitlines())
+    return '\n'.join(line[len(token) + 1:] for line in content[start:end].splitlines())
 
 
 _COPYRIGHT_RE = re.compile(
@@ -185,6 +193,95 @@ def copyright_problem(content: str) -> str | None:
             return 'license=<unknown> (not the Apache-2.0 notice)'
         last = index
     return None
+
+
+# ament_copyright's apache2 LICENSE template (template/apache2_license.txt, the Apache-2.0
+# text), whitespace-normalised: its first words, length and SHA-256.
+_LICENSE_START = 'Apache License Version 2.0, January 2004'
+_LICENSE_LENGTH = 10221
+_LICENSE_SHA256 = '0ffddef9e48f8a09aed5caf2d44f7ba1c1be2d9b8e0a6f693b1635b2d5566645'
+# template/apache2_contributing.txt
+APACHE2_CONTRIBUTING = """Any contribution that you make to this repository will
+be under the Apache 2 License, as dictated by that
+[license](http://www.apache.org/licenses/LICENSE-2.0.html):
+
+~~~
+5. Submission of Contributions. Unless You explicitly state otherwise,
+   any Contribution intentionally submitted for inclusion in the Work
+   by You to the Licensor shall be under the terms and conditions of
+   this License, without any additional terms or conditions.
+   Notwithstanding the above, nothing herein shall supersede or modify
+   the terms of any separate license agreement you may have executed
+   with Licensor regarding such Contributions.
+~~~
+"""
+_SOURCE_EXTENSIONS = ('.c', '.cc', '.cpp', '.cxx', '.h', '.hh', '.hpp', '.hxx', '.cmake', '.py')
+
+
+def _is_repository_root(path: Path) -> bool:
+    return (path / '.git').exists() or (path / '.hg').exists()
+
+
+def _license_problem(content: str) -> str | None:
+    flat = _flat(content)
+    index = flat.find(_LICENSE_START)
+    found = flat[index:index + _LICENSE_LENGTH] if index >= 0 else ''
+    if hashlib.sha256(found.encode('utf-8')).hexdigest() != _LICENSE_SHA256:
+        return '<unknown> (not the Apache-2.0 text)'
+    return None
+
+
+def copyright_report(paths: list[Path]) -> list[str]:
+    """
+    Check ``paths`` as ``ament_copyright PATHS`` does, for the apache2 license only.
+
+    Source files (C/C++, CMake, Python) under each path, skipping directories starting with
+    ``.`` or ``_``, directories with an ``AMENT_IGNORE`` file and a ``setup.py`` beside a
+    ``package.xml``; at a repository root (``.git``), also ``LICENSE`` (the Apache-2.0 text)
+    and ``CONTRIBUTING.md`` (ament's apache2 contributing text).
+
+    Returns
+    -------
+    list of str
+        One ``'path: problem'`` line per file that ament_copyright would report.
+
+    """
+    sources, repo_files = set(), set()
+    for path in paths:
+        if path.is_dir():
+            for dirpath, dirnames, filenames in os.walk(path):
+                here = Path(dirpath)
+                if 'AMENT_IGNORE' in dirnames + filenames:
+                    dirnames[:] = []
+                    continue
+                if _is_repository_root(here):
+                    repo_files.update({here / 'LICENSE', here / 'CONTRIBUTING.md'})
+                dirnames[:] = [d for d in dirnames if d[0] not in '._']
+                for name in filenames:
+                    if name == 'setup.py' and (here / 'package.xml').exists():
+                        continue
+                    if name.endswith(_SOURCE_EXTENSIONS):
+                        sources.add(here / name)
+        elif path.is_file() and path.name.endswith(_SOURCE_EXTENSIONS):
+            sources.add(path)
+    errors = []
+    for path in sorted(sources - repo_files):
+        problem = copyright_problem(path.read_text(encoding='utf-8'))
+        if problem:
+            errors.append(f'{os.path.normpath(path)}: {problem}')
+    for path in sorted(repo_files):
+        if not path.exists() or not path.read_text(encoding='utf-8').strip():
+            errors.append(f'{os.path.normpath(path)}: file not found or empty')
+            continue
+        content = path.read_text(encoding='utf-8')
+        if path.name == 'LICENSE':
+            problem = _license_problem(content)
+        else:
+            problem = (None if _flat(APACHE2_CONTRIBUTING) in _flat(content)
+                       else '<unknown> (not the apache2 contributing text)')
+        if problem:
+            errors.append(f'{os.path.normpath(path)}: {problem}')
+    return errors
 
 
 def header_comment() -> str:
@@ -525,14 +622,34 @@ def fix_docstrings(content: str) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def fix_text(content: str, problems: list[str]) -> str:
+A005_NOQA = ('# noqa: A005 (a subpackage of contact_detector: the standard library module '
+             'stays reachable)')
+
+
+def fix_stdlib_name(content: str, path: Path) -> str:
+    """
+    Mark a module named like a standard library module (A005, reported on line 1).
+
+    flake8-builtins reports ``contact_detector/io/__init__.py`` as shadowing ``io``; a
+    subpackage shadows nothing, so line 1 gets a ``# noqa: A005`` comment line (kept
+    contiguous with the copyright block below it, which ament_copyright still finds).
+    """
+    name = path.parent.name if path.name == '__init__.py' else path.stem
+    first = content.split('\n', 1)[0]
+    if (name not in sys.stdlib_module_names or not content or first.startswith('#!')
+            or ('noqa' in first and 'A005' in first)):
+        return content
+    return A005_NOQA + '\n' + content
+
+
+def fix_text(content: str, problems: list[str], path: Path = Path('module.py')) -> str:
     """Run every step on one file's text; return the new text."""
     for step in (fix_literals, lambda c: fix_imports(c, problems), fix_docstrings):
         try:
             content = step(content)
         except StepRejected as err:
             problems.append(f'a step was dropped: its result changed more than {err}')
-    return fix_header(content)
+    return fix_stdlib_name(fix_header(content), path)
 
 
 def main(argv=None) -> int:
@@ -549,7 +666,7 @@ def main(argv=None) -> int:
         before = path.read_text(encoding='utf-8')
         problems: list[str] = []
         try:
-            after = fix_text(before, problems)
+            after = fix_text(before, problems, path)
         except SyntaxError as err:
             problems.append(f'not parsed: {err}')
             after = before

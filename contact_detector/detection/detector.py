@@ -241,7 +241,7 @@ class ContactDetector:
         self.logic = ReleaseLogic(rule=self.rule, armed=settings.armed_on_start)
         self.rate_check = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
             rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
-        self.counts = {name: 0 for name in self.COUNTERS}
+        self.counts = dict.fromkeys(self.COUNTERS, 0)
         self.last_error: Optional[str] = None
         self.reset()
 

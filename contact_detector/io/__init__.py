@@ -1,3 +1,4 @@
+# noqa: A005 (a subpackage of contact_detector: the standard library module stays reachable)
 # Copyright 2026 contact_detector developers
 #
 # Licensed under the Apache License, Version 2.0 (the "License");

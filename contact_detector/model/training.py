@@ -206,7 +206,9 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     kind : str
         'sample' or 'trial'.
     x : np.ndarray, shape (n, n_features)
+        Feature frames.
     y : np.ndarray, shape (n,)
+        Frame labels (1 = contact).
     groups : np.ndarray, shape (n,)
         Trial index of each frame.
     trial_names : sequence of str

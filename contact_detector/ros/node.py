@@ -207,7 +207,7 @@ class ContactDetectorNode(Node):
         else:
             self.model_path = '(given)'
         self.bundle = bundle
-        self.counts = {name: 0 for name in NODE_COUNTERS}
+        self.counts = dict.fromkeys(NODE_COUNTERS, 0)
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
         self._pending: Optional[NodeConfig] = None

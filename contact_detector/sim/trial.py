@@ -783,8 +783,9 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     onset = t_desc0 + p['descend_s']
     base_ramps = [(v_l, t_lift0, ra), (-v_l, t_hold0 - ra, ra), (-v_d, t_acc0, p['accel_s'])]
     z_contact = _ramp_pos(base_ramps, onset)
-    tl = dict(t_lift0=t_lift0, t_hold0=t_hold0, t_acc0=t_acc0, t_desc0=t_desc0, onset=onset,
-              z_contact=z_contact, descent_dist=v_d * (0.5 * p['accel_s'] + p['descend_s']))
+    tl = {'t_lift0': t_lift0, 't_hold0': t_hold0, 't_acc0': t_acc0, 't_desc0': t_desc0,
+          'onset': onset, 'z_contact': z_contact,
+          'descent_dist': v_d * (0.5 * p['accel_s'] + p['descend_s'])}
 
     # ---- nominal stop (noise-free) for placing hits
     lever_y = abs(float(np.cross(r_contact, up)[1]))
