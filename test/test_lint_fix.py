@@ -73,6 +73,20 @@ def test_comment_between_imports_moves_with_the_import_below_it():
     assert body(fix(source)) == '# the node needs rclpy\nimport contact_detector\nimport numpy\n'
 
 
+def test_imports_a_merge_repeated_become_one_statement():
+    source = ('import os\nfrom contact_detector.errors import InputError, ConfigError\n'
+              'import numpy as np\n\nfrom contact_detector.errors import ModelError, InputError\n'
+              'import os\n')
+    assert body(fix(source)) == ('import os\n\n'
+                                 'from contact_detector.errors import ConfigError, InputError, '
+                                 'ModelError\nimport numpy as np\n')
+
+
+def test_two_imports_from_one_module_binding_different_names_stay_two():
+    source = 'from contact_detector.cli import detect\nfrom contact_detector.cli import evaluate\n'
+    assert body(fix(source)) == source
+
+
 def test_long_from_import_is_wrapped_under_the_bracket():
     names = ', '.join(f'name_{i:02d}' for i in range(12)[::-1])
     fixed = body(fix(f'from contact_detector.io.messages import {names}\n'))

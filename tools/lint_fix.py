@@ -324,15 +324,15 @@ def _normalise(tree: ast.Module, *, docstrings=False, imports=False, literals=Fa
         for const in _docstring_owners(tree):
             const.value = _summary_first(const.value)
     if imports:
-        for alias_owner in ast.walk(tree):
-            if isinstance(alias_owner, ast.ImportFrom):
-                alias_owner.names.sort(key=lambda a: (a.name, a.asname or ''))
+        # A block of consecutive imports stands for the set of names it binds.
         body, run = [], []
         for stmt in tree.body + [None]:
             if isinstance(stmt, (ast.Import, ast.ImportFrom)):
                 run.append(stmt)
                 continue
-            body.extend(sorted(run, key=ast.dump))
+            if run:
+                bound = sorted({_alias_key(s, a) for s in run for a in s.names}, key=repr)
+                body.append(ast.Expr(ast.Constant(repr(bound))))
             run = []
             if stmt is not None:
                 body.append(stmt)
@@ -340,6 +340,18 @@ def _normalise(tree: ast.Module, *, docstrings=False, imports=False, literals=Fa
     if literals:
         tree = _Literals().visit(tree)
     return ast.dump(tree, include_attributes=False)
+
+
+def _alias_key(stmt: ast.AST, alias: ast.alias) -> tuple:
+    if isinstance(stmt, ast.ImportFrom):
+        return ('from', stmt.level, stmt.module, alias.name, alias.asname)
+    return ('import', alias.name, alias.asname)
+
+
+def _merge_key(stmt: ast.AST) -> tuple:
+    if isinstance(stmt, ast.ImportFrom):
+        return ('from', stmt.level, stmt.module)
+    return ('import', ast.dump(stmt))
 
 
 def _summary_first(doc: str) -> str:
@@ -549,13 +561,36 @@ def fix_imports(content: str, problems: list[str]) -> str:
         if any(c.type < 0 for c in info):
             problems.append(f'line {run[0].lineno}: one import statement mixes groups')
             continue
-        if names_ok and order_ok and groups_ok:
+        # The same module imported twice in a block (what a merge can leave): one statement.
+        bound = [_alias_key(stmt, a) for stmt in run for a in stmt.names]
+        unique = len(set(bound)) == len(bound)
+        if names_ok and order_ok and groups_ok and unique:
             continue
-        units = []
+        units, first_of = [], {}
         for i, (stmt, cls) in enumerate(zip(run, info)):
             above = lines[run[i - 1].end_lineno:stmt.lineno - 1] if i else []
             comments = [line for line in above if line.strip()]
             text = ''.join(lines[stmt.lineno - 1:stmt.end_lineno])
+            key = _merge_key(stmt)
+            repeats = {_alias_key(stmt, a) for a in stmt.names} & {
+                _alias_key(units[first_of[key]][4], a) for a in units[first_of[key]][4].names
+            } if key in first_of else set()
+            if repeats:
+                j = first_of[key]
+                if comments or _has_comment(text) or _has_comment(units[j][3]):
+                    problems.append(f'line {stmt.lineno}: a repeated import with a comment; '
+                                    'merge it by hand')
+                    break
+                if isinstance(stmt, ast.ImportFrom):
+                    old = units[j][4]
+                    aliases = list({(a.name, a.asname): a
+                                    for a in old.names + stmt.names}.values())
+                    merged = ast.ImportFrom(module=stmt.module, names=aliases, level=stmt.level)
+                    merged_cls = units[j][2]._replace(names=[a.name for a in aliases])
+                    units[j] = [google.import_key(merged_cls), units[j][1], merged_cls,
+                                _format_from(merged), merged]
+                continue
+            first_of.setdefault(key, len(units))
             if google.sorted_names(cls.names) != cls.names:
                 if _has_comment(text):
                     problems.append(f'line {stmt.lineno}: names out of order in an import '
@@ -564,11 +599,11 @@ def fix_imports(content: str, problems: list[str]) -> str:
                 text = _format_from(stmt)
             if not text.endswith('\n'):
                 text += '\n'
-            units.append((google.import_key(cls), i, cls, ''.join(comments) + text))
+            units.append([google.import_key(cls), i, cls, ''.join(comments) + text, stmt])
         else:
             units.sort(key=lambda u: (u[0], u[1]))
             out, prev = [], None
-            for _, _, cls, text in units:
+            for _, _, cls, text, _ in units:
                 if prev is not None and not google.same_section(prev, cls):
                     out.append('\n')
                 out.append(text)
