@@ -62,7 +62,7 @@ def test_imports_sorted_google_style_with_the_package_among_third_party():
 
 
 def test_imports_separated_by_code_are_not_moved_but_reported():
-    source = 'import sys\n\nimport numpy\n\nsys.path.insert(0, ".")\n\nimport bench\n'
+    source = "import sys\n\nimport numpy\n\nsys.path.insert(0, '.')\n\nimport bench\n"
     problems = []
     assert body(lint_fix.fix_text(source, problems)) == source
     assert problems and 'by hand' in problems[0]
@@ -122,6 +122,29 @@ def test_dict_call_kept_where_dict_is_rebound_or_the_line_would_be_too_long():
             if len('x = dict(' + ', '.join(f'k{i}={i}' for i in range(n)) + ')') <= 99)
     long_line = 'x = dict(' + ', '.join(f'k{i}={i}' for i in range(n)) + ')\n'
     assert body(fix(long_line)) == long_line
+
+
+def test_quotes_follow_flake8_quotes_defaults_where_the_text_stays_the_same():
+    source = r"""a = "plain"
+b = "it's"
+c = "back\\slash"
+d = '''
+line
+'''
+e = f'''{a!r}
+'''
+g = '''ends with "'''
+"""
+    expected = (source.replace('a = "plain"', "a = 'plain'")
+                .replace("d = '''\nline\n'''", 'd = """\nline\n"""')
+                .replace("e = f'''{a!r}\n'''", 'e = f"""{a!r}\n"""'))
+    assert expected.count('"""') == 4
+    fixed = body(fix(source))
+    assert fixed == expected
+    before, after = {}, {}
+    exec(source, before)
+    exec(fixed, after)
+    assert [before[k] for k in 'abcdeg'] == [after[k] for k in 'abcdeg']
 
 
 def test_header_goes_after_a_shebang_and_is_not_added_twice():

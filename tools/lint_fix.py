@@ -23,7 +23,7 @@ Fix the mechanical findings of ament_flake8, ament_pep257 and ament_copyright in
 Idempotent (a second run changes nothing) and behaviour-preserving: after each step the file's
 syntax tree is compared with the one before, normalised for exactly what the step may change
 (docstring layout, the order of a block of imports, ``dict()`` -> ``{}``); a step whose result
-differs in anything else is dropped and reported. The steps, in order:
+differs in anything else is dropped and reported. The steps:
 
 1. C408: ``dict()``, ``dict(a=x)``, ``list()``, ``tuple()`` become ``{}``, ``{'a': x}``,
    ``[]``, ``()`` (not when a line would pass 99 characters, nor when the module rebinds the
@@ -40,7 +40,10 @@ differs in anything else is dropped and reported. The steps, in order:
 4. ament_copyright: a file without a copyright notice gets ``Copyright <YEAR>
    contact_detector developers`` and the Apache-2.0 notice as a comment block, after any
    shebang or coding line, exactly as ``ament_copyright --add-missing`` writes it.
-5. A005 (flake8-builtins): a module named like a standard library module (the subpackage
+5. Q000/Q001/Q002 (flake8-quotes' defaults): one-line strings in single quotes, triple-quoted
+   ones in double quotes, where the string's text stays the same (no quote of the new kind,
+   no backslash inside).
+6. A005 (flake8-builtins): a module named like a standard library module (the subpackage
    ``contact_detector.io``) gets a ``# noqa: A005`` first line.
 
 What it cannot fix (D401 imperative mood, D417, lines too long, ...) the linters still report:
@@ -655,6 +658,44 @@ def fix_docstrings(content: str) -> str:
 
 
 # --------------------------------------------------------------------------------------------
+# Quotes (flake8-quotes' defaults, as under ament)
+
+
+def fix_quotes(content: str) -> str:
+    """
+    Use single quotes for one-line strings (Q000) and double for triple-quoted ones (Q001/Q002).
+
+    Only where the string's text does not change: no backslash, no quote of the new kind inside
+    (a triple-quoted string may hold single double quotes, not at its end, unless an f-string).
+    Python >= 3.12 tokenises f-strings in pieces: there they keep their quotes.
+    """
+    lines = content.splitlines(keepends=True)
+    edits = []
+    for tok in tokenize.generate_tokens(io.StringIO(content).readline):
+        if tok.type != tokenize.STRING:
+            continue
+        prefix = re.match(r'[rRbBuUfF]*', tok.string).group(0)
+        text = tok.string[len(prefix):]
+        if text.startswith("'''"):
+            inner = text[3:-3]
+            if ('"' in inner[-1:] or '"""' in inner or '\\' in inner
+                    or ('f' in prefix.lower() and '"' in inner)):
+                continue
+            new = '"""' + inner + '"""'
+        elif text.startswith('"') and not text.startswith('"""'):
+            inner = text[1:-1]
+            if "'" in inner or '\\' in inner:
+                continue
+            new = "'" + inner + "'"
+        else:
+            continue
+        (r0, c0), (r1, c1) = tok.start, tok.end
+        edits.append(((r0, c0 + len(prefix)), (r1, c1), new))
+    new_content = ''.join(_apply(lines, edits)) if edits else content
+    return _checked(content, new_content)
+
+
+# --------------------------------------------------------------------------------------------
 
 
 A005_NOQA = ('# noqa: A005 (a subpackage of contact_detector: the standard library module '
@@ -679,7 +720,8 @@ def fix_stdlib_name(content: str, path: Path) -> str:
 
 def fix_text(content: str, problems: list[str], path: Path = Path('module.py')) -> str:
     """Run every step on one file's text; return the new text."""
-    for step in (fix_literals, lambda c: fix_imports(c, problems), fix_docstrings):
+    for step in (fix_literals, lambda c: fix_imports(c, problems), fix_docstrings,
+                 fix_quotes):
         try:
             content = step(content)
         except StepRejected as err:
