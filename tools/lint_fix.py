@@ -16,14 +16,16 @@
 """
 Fix the mechanical findings of ament_flake8, ament_pep257 and ament_copyright in place.
 
-    .venv/bin/python tools/lint_fix.py            # fix every Python file of the package
+    .venv/bin/python tools/lint_fix.py            # fix every Python file of this package
     .venv/bin/python tools/lint_fix.py --check    # list what would change, exit 1 if anything
     .venv/bin/python tools/lint_fix.py FILE...    # only these files
 
 Idempotent (a second run changes nothing) and behaviour-preserving: after each step the file's
 syntax tree is compared with the one before, normalised for exactly what the step may change
-(docstring layout, the order of a block of imports, ``dict()`` -> ``{}``); a step whose result
-differs in anything else is dropped and reported. The steps:
+(docstring layout, the names a block of imports binds, ``dict()`` -> ``{}``; the string
+steps must leave the tree identical); a step whose result differs in anything else is dropped
+and reported. Exit status 1 if something is left for a hand fix (or, with --check, if a file
+would change). The steps:
 
 1. C408: ``dict()``, ``dict(a=x)``, ``list()``, ``tuple()`` become ``{}``, ``{'a': x}``,
    ``[]``, ``()`` (not when a line would pass 99 characters, nor when the module rebinds the
@@ -33,8 +35,9 @@ differs in anything else is dropped and reported. The steps:
    is out of order is sorted, names inside ``from x import a, b`` are sorted, and one blank
    line separates the groups (standard library, then third party, which includes
    ``contact_detector`` itself). Comment lines between imports move with the import below
-   them. Imports separated by code are not moved across it: the order problems left there
-   are printed for a hand fix.
+   them; a name imported twice in one block (as a merge can leave it) is imported once.
+   Imports separated by code (a ``sys.path`` insert) are not moved across it: the order
+   problems left there are printed for a hand fix.
 3. D213 (ament_pep257): a multi-line docstring's summary moves to the line after the
    opening quotes.
 4. ament_copyright: a file without a copyright notice gets ``Copyright <YEAR>
