@@ -1,4 +1,19 @@
-"""``contact-detector train``: train the contact forest the paper's way and write its report.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector train``: train the contact forest the paper's way and write its report.
 
     contact-detector train BAG_OR_DIR... --out models/contact_forest.npz --report DIR
                            [--labels labels.csv] [--with-sim N [--sim-dir DIR]]
@@ -23,9 +38,6 @@ import sys
 import tempfile
 from typing import Optional, Sequence
 
-import numpy as np
-from tqdm import tqdm
-
 from contact_detector.cli.detect import add_stream_arguments, discover_all, stream_spec
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
@@ -42,6 +54,8 @@ from contact_detector.model.training import (LabelWindow, read_labels_csv, run_s
                                              trial_features, unlabelled_bags)
 from contact_detector.sim.bag_writer import write_trials
 from contact_detector.sim.trial import simulate_trials
+import numpy as np
+from tqdm import tqdm
 
 #: Condition sets of the simulated trials ``--with-sim`` adds.
 SIM_CONDITIONS = ('wide',)
