@@ -33,7 +33,8 @@ import sys
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-UNDER_COLCON = ['test/test_linters.py', 'test/test_package.py', 'test/test_launch.py',
+UNDER_COLCON = ['test/test_flake8.py', 'test/test_pep257.py', 'test/test_copyright.py',
+                'test/test_package.py', 'test/test_launch.py',
                 'test/test_features.py', 'test/test_release.py', 'test/test_cdr.py',
                 'test/test_messages.py', 'test/test_compiled_forest.py', 'test/test_bundle.py']
 

@@ -58,13 +58,19 @@ IMPORT_KEYS = {
     'pytest': 'python3-pytest',
     'hypothesis': 'python3-hypothesis',
     'setuptools': 'python3-setuptools',
+    'ament_copyright': 'ament_copyright',
+    'ament_flake8': 'ament_flake8',
+    'ament_pep257': 'ament_pep257',
 }
 #: Imports with no rosdep key: optional, imported where they are used, and said so in
 #: package.xml.
 OPTIONAL = {'skops': 'pip install skops (setup.py extra "safe")'}
 #: Tools the tests run (python -m NAME) or configure (setup.cfg), by rosdep key.
 TOOL_KEYS = {'flake8': 'python3-flake8', 'pydocstyle': 'pydocstyle',
-             'flake8-quotes': 'python3-flake8-quotes'}
+             'flake8-quotes': 'python3-flake8-quotes',
+             'flake8-blind-except': 'python3-flake8-blind-except',
+             'flake8-class-newline': 'python3-flake8-class-newline',
+             'flake8-deprecated': 'python3-flake8-deprecated'}
 
 
 def package_xml() -> ET.Element:
@@ -120,12 +126,10 @@ def test_every_test_import_and_tool_is_declared():
     missing = sorted({IMPORT_KEYS[name] for name in imports if name in IMPORT_KEYS}
                      - available)
     assert not missing, f'package.xml lacks <test_depend> for {missing}'
-    text = '\n'.join(path.read_text() for path in tests)
-    tools = {name for name in ('flake8', 'pydocstyle') if f"'-m', '{name}'" in text}
-    if 'inline-quotes' in (ROOT / 'setup.cfg').read_text():
-        tools.add('flake8-quotes')
-    assert tools, 'the linter tests no longer run flake8/pydocstyle: update TOOL_KEYS'
-    missing = sorted({TOOL_KEYS[tool] for tool in tools} - available)
+    # ament_flake8 and ament_pep257 (test_flake8.py, test_pep257.py) run flake8 with these
+    # plugins and pydocstyle as libraries: each needs its key.
+    assert {'ament_flake8', 'ament_pep257'} <= set(imports)
+    missing = sorted(set(TOOL_KEYS.values()) - available)
     assert not missing, f'package.xml lacks <test_depend> for the tools {missing}'
 
 

@@ -104,8 +104,8 @@ def ablation_settings() -> List[FeatureSetting]:
         FeatureSetting('paper 7 features, no detrend', paper7, STATE),
         FeatureSetting('paper 7, detrend', replace(paper7, ft_detrend='mean'), STATE),
         FeatureSetting('detrend + extras (shipped)', full, STATE),
-        FeatureSetting('shipped, without ft_delta_angle', full, STATE,
-                       columns=tuple(n for n in full.feature_names if n != 'ft_delta_angle')),
+        FeatureSetting('shipped, without the vector shifts', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in _SHIFT)),
         FeatureSetting('shipped, without raw audio power', full, STATE,
                        columns=tuple(n for n in full.feature_names if n != 'audio_power')),
         FeatureSetting('shipped, without the *_change_max features (round 4)', full, STATE,
@@ -120,11 +120,11 @@ def ablation_settings() -> List[FeatureSetting]:
         FeatureSetting('F/T only', full, STATE,
                        columns=tuple(n for n in full.feature_names
                                      if not n.startswith('audio'))),
-        FeatureSetting('reduced: dB above floor, recent peak, torque centroid/spread, deltas',
+        FeatureSetting('reduced: dB above floor, recent peak, torque centroid/spread, shifts',
                        full, STATE,
                        columns=('audio_power_rel_db', 'audio_peak_rel_db', 'torque_centroid',
-                                'torque_spread', 'force_delta', 'torque_delta',
-                                'ft_delta_angle')),
+                                'torque_spread', 'force_shift', 'torque_shift',
+                                'force_shift_min')),
     ]
 
 
