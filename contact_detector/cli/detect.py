@@ -6,8 +6,10 @@
 Writes one JSON object per line: for every audio frame
 ``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
 ``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's name, T the absolute
-bag time in seconds of the last audio sample the decision used. Each bag starts a fresh
-detector, armed. ``--params`` reads the node's YAML parameter file (the
+bag time in seconds of the last audio sample the decision used (of the last F/T sample with an
+F/T-only model). Each bag starts a fresh detector, armed. A recording without the audio topic
+is decided by the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the
+command prints which model it used. ``--params`` reads the node's YAML parameter file (the
 ``contact_detector_node: ros__parameters:`` section), so offline runs use the robot's settings;
 ``--audio-rate`` overrides ``audio.sample_rate``.
 """
@@ -24,10 +26,11 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError, ContactDetectorError
-from contact_detector.io.bags import find_bags
+from contact_detector.io.bags import find_bags, topic_types
 from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
-from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
+from contact_detector.model.bundle import (DecisionRule, default_ft_model_path,
+                                           default_model_path, load_bundle, ModelBundle)
 
 
 def read_node_params(path: Path) -> dict:
@@ -95,7 +98,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('bags', nargs='+', help='bag directories or folders of bags')
     parser.add_argument('--model', type=Path, default=None,
                         help='model bundle (default: model.path from --params, else the '
-                             'shipped model)')
+                             'shipped model; for a recording without the audio topic, or '
+                             'with audio.enabled false in --params, the shipped F/T-only '
+                             'model)')
     parser.add_argument('--params', type=Path, default=None, help='node parameter YAML')
     parser.add_argument('--wrench-topic', default='/wrist_wrench')
     parser.add_argument('--audio-topic', default='/audio')
@@ -110,27 +115,92 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 1
 
 
+class DetectorFactory:
+    """
+    Fresh detectors with the model a recording needs (each model file is loaded once).
+
+    ``model`` given (``--model`` or ``model.path``): always that model. Otherwise the shipped
+    multimodal model for recordings with an audio topic and the shipped F/T-only model for
+    recordings without one, or for every recording when ``audio_enabled`` is False (the node's
+    ``audio.enabled``).
+
+    Parameters
+    ----------
+    model : Path or None
+        Model file that overrides the choice.
+    audio_enabled : bool
+        False: use the F/T-only model even where there is audio.
+    settings : dict
+        :class:`DetectorSettings` fields (without the rule).
+    rule : dict or None
+        Decision rule fields that override each model's own rule.
+
+    """
+
+    def __init__(self, *, model: Optional[Path], audio_enabled: bool, settings: dict,
+                 rule: Optional[dict]) -> None:
+        self.model = model
+        self.audio_enabled = audio_enabled
+        self.settings = settings
+        self.rule = rule
+        self._loaded: dict = {}
+
+    def path_for(self, *, has_audio: bool = True) -> Path:
+        """Return the model file for a recording with (or without) an audio topic."""
+        if self.model is not None:
+            return self.model
+        if has_audio and self.audio_enabled:
+            return default_model_path()
+        return default_ft_model_path()
+
+    def bundle_for(self, *, has_audio: bool = True) -> ModelBundle:
+        """Return the loaded model for a recording with (or without) an audio topic."""
+        path = self.path_for(has_audio=has_audio)
+        if path not in self._loaded:
+            bundle = load_bundle(path=path)
+            settings = dict(self.settings)
+            if self.rule is not None:
+                base = bundle.decision_rule.to_dict()
+                base.update(self.rule)
+                settings['rule'] = DecisionRule.from_dict(base)
+            self._loaded[path] = (bundle, DetectorSettings(**settings))
+        return self._loaded[path][0]
+
+    def describe(self, *, has_audio: bool = True) -> str:
+        """``PATH (model id, F/T-only or audio + F/T)`` for the messages the tools print."""
+        bundle = self.bundle_for(has_audio=has_audio)
+        kind = 'F/T-only' if bundle.feature_config.ft_only else 'audio + F/T'
+        return f'{self.path_for(has_audio=has_audio)} ({bundle.model_id}, {kind})'
+
+    def __call__(self, *, has_audio: bool = True) -> ContactDetector:
+        """Return a fresh, armed detector for a recording with (or without) audio."""
+        bundle = self.bundle_for(has_audio=has_audio)
+        settings = self._loaded[self.path_for(has_audio=has_audio)][1]
+        return ContactDetector(bundle=bundle, settings=settings)
+
+
 def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path],
                            audio_rate: Optional[float]):
     """Return (make_detector, stream_fields) from a model path and node parameters."""
     params = read_node_params(params_file) if params_file else {}
     settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
-    path = model or (Path(model_param) if model_param else default_model_path())
-    bundle = load_bundle(path=path)
-    if rule is not None:
-        base = bundle.decision_rule.to_dict()
-        base.update(rule)
-        settings['rule'] = DecisionRule.from_dict(base)
-    detector_settings = DetectorSettings(**settings)
-
-    def make() -> ContactDetector:
-        return ContactDetector(bundle=bundle, settings=detector_settings)
+    path = model or (Path(model_param) if model_param else None)
+    make = DetectorFactory(model=path, audio_enabled=bool(params.get('audio.enabled', True)),
+                           settings=settings, rule=rule)
+    make.bundle_for(has_audio=True)         # a missing or bad model fails here, not per bag
     return make, stream
 
 
-def detect_bag(*, bag: Path, make_detector, spec: StreamSpec) -> Run:
+def has_audio_topic(bag: Path, *, spec: StreamSpec) -> bool:
+    """Whether the recording has the audio topic at all (else the F/T-only model is used)."""
+    return spec.audio_topic in topic_types(bag)
+
+
+def detect_bag(*, bag: Path, make_detector, spec: StreamSpec,
+               has_audio: bool = True) -> Run:
     """Run a fresh, armed detector over one bag."""
-    return run_detector(sensor_events(bag, spec=spec), detector=make_detector())
+    return run_detector(sensor_events(bag, spec=spec),
+                        detector=make_detector(has_audio=has_audio))
 
 
 def _detect(args: argparse.Namespace) -> int:
@@ -140,9 +210,16 @@ def _detect(args: argparse.Namespace) -> int:
     bags = find_bags(args.bags)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     frames = releases = 0
+    used = set()
     with args.out.open('w') as out:
         for bag in tqdm(bags, desc='detect', unit='bag', disable=len(bags) < 2):
-            run = detect_bag(bag=bag, make_detector=make, spec=spec)
+            has_audio = has_audio_topic(bag, spec=spec)
+            if has_audio not in used:
+                used.add(has_audio)
+                where = 'with' if has_audio else 'without'
+                print(f'model for recordings {where} {spec.audio_topic}: '
+                      f'{make.describe(has_audio=has_audio)}')
+            run = detect_bag(bag=bag, make_detector=make, spec=spec, has_audio=has_audio)
             name = bag.name
             rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
                                    'contact': bool(c)})

@@ -20,7 +20,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from contact_detector.cli.detect import build_detector_factory
+from contact_detector.cli.detect import build_detector_factory, has_audio_topic
 from contact_detector.cli.train import conditions_of
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError, ContactDetectorError
@@ -30,7 +30,10 @@ from contact_detector.evaluation.metrics import (frame_labels, frame_report, out
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 
-DETECTORS = ('forest',) + BASELINES
+#: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
+#: with an audio topic, F/T-only without); ``forest-ft``: the F/T-only model (``--ft-model``,
+#: else the shipped one) on every recording, for a comparison.
+DETECTORS = ('forest', 'forest-ft') + BASELINES
 
 
 def truth_for(bag: Path, events, manifest: dict) -> Truth:
@@ -49,9 +52,13 @@ def truth_for(bag: Path, events, manifest: dict) -> Truth:
 
 def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spec: StreamSpec,
              audio_rate: float, wrench_rate: float,
-             label_window: Optional[dict] = None) -> Dict[str, dict]:
+             label_window: Optional[dict] = None, make_ft=None) -> Dict[str, dict]:
     """
     Run every detector on every bag; return per-detector outcomes, summaries, frame reports.
+
+    ``make_forest(has_audio=...)`` gives the ``forest`` detector of a recording with or without
+    the audio topic (:class:`contact_detector.cli.detect.DetectorFactory`); ``make_ft()`` the
+    ``forest-ft`` one. The models used are printed once each.
 
     Returns
     -------
@@ -62,12 +69,29 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
     manifest = conditions_of(bags)
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     y_true, y_pred = [], []
+    announced = set()
     for bag in tqdm(bags, desc='evaluate', unit='bag', disable=len(bags) < 3):
         events = load_events(bag, spec=spec)
         truth = truth_for(bag, events, manifest)
+        has_audio = has_audio_topic(bag, spec=spec)
         for name in detectors:
-            detector = (make_forest() if name == 'forest' else
-                        make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate))
+            if name == 'forest':
+                detector = make_forest(has_audio=has_audio)
+                key = (name, has_audio)
+            elif name == 'forest-ft':
+                detector = make_ft()
+                key = (name, True)
+            else:
+                detector = make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate)
+                key = None
+            if key is not None and key not in announced and hasattr(make_forest, 'describe'):
+                announced.add(key)
+                factory = make_forest if name == 'forest' else make_ft
+                where = 'with' if has_audio else 'without'
+                scope = (f'recordings {where} {spec.audio_topic}' if name == 'forest'
+                         else 'every recording')
+                print(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}',
+                      file=sys.stderr)
             run = run_detector(events, detector=detector)
             outcomes[name].append(score_trial(truth=truth, releases=run.releases,
                                               events=run.events))
@@ -159,7 +183,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('bags', nargs='+')
     parser.add_argument('--detector', action='append', choices=DETECTORS + ('all',),
                         help='detector(s) to evaluate (repeatable; default forest)')
-    parser.add_argument('--model', type=Path, default=None)
+    parser.add_argument('--model', type=Path, default=None,
+                        help='model of the forest detector (default: the shipped model, or the '
+                             'shipped F/T-only model for recordings without the audio topic)')
+    parser.add_argument('--ft-model', type=Path, default=None,
+                        help='model of the forest-ft detector (default: the shipped F/T-only '
+                             'model)')
     parser.add_argument('--params', type=Path, default=None)
     parser.add_argument('--audio-rate', type=float, default=None)
     parser.add_argument('--wrench-topic', default='/wrist_wrench')
@@ -172,12 +201,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                               audio_rate=args.audio_rate)
         probe = make()
+        make_ft = None
+        if 'forest-ft' in detectors:
+            make_ft, _ = build_detector_factory(model=args.ft_model, params_file=args.params,
+                                                audio_rate=args.audio_rate)
+            make_ft.model, make_ft.audio_enabled = args.ft_model, False
+            make_ft.bundle_for(has_audio=False)
         spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic,
                           **stream)
         results = evaluate(bags=find_bags(args.bags), detectors=detectors, make_forest=make,
                            spec=spec, audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,
-                           label_window=probe.bundle.label_window)
+                           label_window=probe.bundle.label_window, make_ft=make_ft)
     except ContactDetectorError as err:
         print(f'contact-detector evaluate: {err}', file=sys.stderr)
         return 1

@@ -23,7 +23,7 @@ from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.metrics import score_trial, summarize, Truth
 from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VERSION,
-                                              FeatureConfig)
+                                              FeatureConfig, SHIFT_FEATURES)
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
@@ -45,6 +45,10 @@ DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
                                                  'torque_change', 'ft_change_angle',
                                                  'audio_rise_db', 'audio_peak_gap_db',
                                                  'force_change_max', 'torque_change_max'))
+#: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
+#: do not depend on the sensor's orientation, tare or sign convention (docs/offline.md,
+#: "Robots without a microphone").
+DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
 DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.3)
@@ -77,9 +81,14 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
-    parser.add_argument('--extra-features', default=','.join(d.extra_features),
+    parser.add_argument('--extra-features', default=None,
                         help='comma-separated extra features, from '
-                             f"{', '.join(EXTRA_FEATURES)}")
+                             f"{', '.join(EXTRA_FEATURES)} (default "
+                             f"{','.join(d.extra_features)}; with --no-audio "
+                             f"{','.join(DEFAULT_FT_ONLY_EXTRA)})")
+    parser.add_argument('--no-audio', action='store_true',
+                        help='an F/T-only model (robots without a microphone): no audio '
+                             'column, one frame per F/T feature frame')
     parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
                         help='label window start after the onset, s')
     parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
@@ -127,8 +136,12 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     """Build the FeatureConfig from parsed options."""
-    extra = tuple(e for e in args.extra_features.split(',') if e)
-    return FeatureConfig(ft_window=args.ft_window, ft_hop=args.ft_hop,
+    no_audio = bool(getattr(args, 'no_audio', False))
+    if args.extra_features is None:
+        extra = DEFAULT_FT_ONLY_EXTRA if no_audio else DEFAULT_FEATURES.extra_features
+    else:
+        extra = tuple(e for e in args.extra_features.split(',') if e)
+    return FeatureConfig(audio=not no_audio, ft_window=args.ft_window, ft_hop=args.ft_hop,
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,

@@ -2,6 +2,7 @@
 
 from contact_detector.model.bundle import (
     DecisionRule,
+    default_ft_model_path,
     default_model_path,
     load_bundle,
     ModelBundle,
@@ -16,6 +17,7 @@ __all__ = [
     'DecisionRule',
     'ForestArrays',
     'ModelBundle',
+    'default_ft_model_path',
     'default_model_path',
     'load_bundle',
     'runtime_versions',
