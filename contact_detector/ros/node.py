@@ -9,10 +9,12 @@ Interface (all names relative, remappable)::
 
     subscribes  wrist_wrench         geometry_msgs/msg/WrenchStamped   sensor-data QoS
                 audio                audio.msg_type                    sensor-data QoS
+                                     (not with an F/T-only model)
                 audio_info           audio_common_msgs/msg/AudioInfo   transient local
                                      (ros-drivers audio_common types only)
-    publishes   contact              std_msgs/msg/Bool      one per audio frame
-                contact_probability  std_msgs/msg/Float32   one per audio frame
+    publishes   contact              std_msgs/msg/Bool      one per frame (audio frame, or
+                                                            F/T frame with an F/T-only model)
+                contact_probability  std_msgs/msg/Float32   one per frame
                 release              std_msgs/msg/Bool      True once per event while armed
                 /diagnostics         diagnostic_msgs/msg/DiagnosticArray
                 gripper.topic        trajectory_msgs/msg/JointTrajectory (gripper.enabled)
@@ -55,7 +57,8 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsg
                                           audio_stamp, audio_to_samples, check_audio_info,
                                           check_stamp, embedded_audio_format,
                                           wrench_sample)
-from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
+from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
+                                           load_bundle, ModelBundle)
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
@@ -188,12 +191,19 @@ class ContactDetectorNode(Node):
         cfg = self.config
         self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
         if bundle is None:
-            path = cfg.model_path or str(default_model_path())
+            path = cfg.model_path or str(default_model_path() if cfg.audio_enabled
+                                         else default_ft_model_path())
             bundle = load_bundle(path=path)
             self.model_path = path
         else:
             self.model_path = '(given)'
+        if not cfg.audio_enabled and not bundle.feature_config.ft_only:
+            raise ConfigError(f'audio.enabled is false but model {bundle.model_id} '
+                              f'({self.model_path}) uses audio features: give an F/T-only '
+                              'model.path, or leave it empty for the shipped F/T-only model')
         self.bundle = bundle
+        # An F/T-only model: no audio subscription, frames are clocked by the wrench stream.
+        self.use_audio = not bundle.feature_config.ft_only
         self.counts = {name: 0 for name in NODE_COUNTERS}
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
@@ -238,11 +248,11 @@ class ContactDetectorNode(Node):
         self._read_audio = FAST_DECODERS.get(cfg.audio_msg_type)
         self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
                                                    self._on_wrench, input_qos, raw=True)
-        self.audio_sub = self.create_subscription(
-            audio_class, 'audio', self._on_audio, input_qos,
-            raw=self._read_audio is not None)
+        self.audio_sub = (self.create_subscription(audio_class, 'audio', self._on_audio,
+                                                   input_qos, raw=self._read_audio is not None)
+                          if self.use_audio else None)
         self.info_sub = None
-        if info_class is not None:
+        if info_class is not None and self.use_audio:
             info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                                   reliability=ReliabilityPolicy.RELIABLE,
                                   durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -261,7 +271,7 @@ class ContactDetectorNode(Node):
         rule = self.detector.rule
         self.get_logger().info(
             f'model {bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
-            f'audio {cfg.audio_msg_type} {self._format_text()}; wrench {cfg.wrench_rate:g} Hz; '
+            f'audio {self._audio_text()}; wrench {cfg.wrench_rate:g} Hz; '
             f'release {"armed" if self.detector.armed else "disarmed"}')
 
     def _settings(self, *, rate: float, armed: bool) -> DetectorSettings:
@@ -280,6 +290,11 @@ class ContactDetectorNode(Node):
             raise ConfigError(f'cannot run model {self.bundle.model_id} with audio at {rate:g} '
                               f'Hz and wrench.rate={self.config.wrench_rate:g} Hz: {err}'
                               ) from err
+
+    def _audio_text(self) -> str:
+        if not self.use_audio:
+            return 'off (F/T-only model: no audio subscription, one frame per F/T frame)'
+        return f'{self.config.audio_msg_type} {self._format_text()}'
 
     def _format_text(self) -> str:
         fmt, channel = self.audio_format, self.config.audio_channel
@@ -328,7 +343,7 @@ class ContactDetectorNode(Node):
 
     def wrench_wanted(self) -> bool:
         """Whether an audio frame waits for F/T data (the executor then wakes for wrench)."""
-        return self.detector.extractor.pending > 0
+        return not self.use_audio or self.detector.extractor.pending > 0
 
     def latency_samples(self, kind: str = 'audio') -> np.ndarray:
         """
@@ -604,9 +619,10 @@ class ContactDetectorNode(Node):
             'decision_rule': rule.describe(),
             'armed': str(det.armed),
             'audio_msg_type': cfg.audio_msg_type,
-            'audio_format': self._format_text(),
+            'audio': 'on' if self.use_audio else 'off (F/T-only model)',
+            'audio_format': self._format_text() if self.use_audio else 'n/a',
             'audio_info': ('refused: ' + self.audio_refused if self.audio_refused
-                           else 'n/a' if not self.audio_spec.info_topic
+                           else 'n/a' if not self.audio_spec.info_topic or not self.use_audio
                            else 'ok' if self.audio_info_ok else 'waiting'),
             'audio_msg_rate_hz': f'{self.audio.window_msgs / span:.1f}',
             'audio_sample_rate_hz': f'{self.audio.window_samples / span:.0f}',
@@ -626,7 +642,9 @@ class ContactDetectorNode(Node):
         values.update({name: str(value) for name, value in sorted(counts.items())})
         values['audio_received'] = str(self.audio.received)
         values['wrench_received'] = str(self.wrench.received)
-        stale = [name for name, value in (('audio', audio_age), ('wrench', wrench_age))
+        inputs = (('audio', audio_age), ('wrench', wrench_age)) if self.use_audio else (
+            ('wrench', wrench_age),)
+        stale = [name for name, value in inputs
                  if value is None or value > cfg.max_input_delay_s]
         troubles = {name: counts.get(name, 0) - self._window_counts.get(name, 0)
                     for name in WARN_COUNTERS}
@@ -671,7 +689,8 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     cfg = node.config
     if cfg.executor_type == 'hot_path':
-        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench
+        # Without audio the wrench stream clocks the frames: never lazy.
+        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench and node.use_audio
                 and cfg.wrench_stamp_source == 'header' else [])
         executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
                                    lazy=lazy, wanted=node.wrench_wanted,
