@@ -92,7 +92,8 @@ def int16_multiarray_cdr(data: np.ndarray) -> bytes:
     return b'\x00\x01\x00\x00' + head + data.tobytes()
 
 
-def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Path:
+def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
+                    audio: bool = True) -> Path:
     """
     Write one trial as a rosbag2 directory.
 
@@ -104,6 +105,8 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
         The bag directory to create; it must not exist.
     storage : str
         'sqlite3' or 'mcap'.
+    audio : bool
+        False: no audio topic at all (a robot without a microphone).
 
     Returns
     -------
@@ -129,7 +132,7 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
     stamp_ns = _ns(trial, trial.wrench_t)
     wrench_log = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
     wrench_log_ns = np.maximum(_ns(trial, wrench_log), stamp_ns)
-    audio_log_ns = _ns(trial, trial.chunk_log_t)
+    audio_log_ns = _ns(trial, trial.chunk_log_t) if audio else np.zeros(0, np.int64)
     truth_ns = _ns(trial, np.array([trial.onset_t, trial.onset_end_t]))
     # one global log-time order (stable: wrench, audio, truth on ties)
     times = np.concatenate([wrench_log_ns, audio_log_ns, truth_ns])
@@ -140,19 +143,20 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
     order = np.lexsort((idx, kinds, times))
     starts = np.concatenate(([0], trial.chunk_ends[:-1]))
     wrench_raw = wrench_cdr(stamp_ns=stamp_ns, force=trial.force, torque=trial.torque)
-    audio = trial.audio
+    samples = trial.audio
     try:
         writer = Writer(path, version=9, storage_plugin=STORAGES[storage])
         with writer:
             c_w = writer.add_connection(WRENCH_TOPIC, WRENCH_TYPE, typestore=ts)
-            c_a = writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=ts)
+            c_a = (writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=ts) if audio
+                   else None)
             c_t = writer.add_connection(TRUTH_TOPIC, TRUTH_TYPE, typestore=ts)
             for k in order:
                 kind, i, t = kinds[k], int(idx[k]), int(times[k])
                 if kind == 0:
                     writer.write(c_w, t, wrench_raw[i].tobytes())
                 elif kind == 1:
-                    chunk = audio[starts[i]:trial.chunk_ends[i]]
+                    chunk = samples[starts[i]:trial.chunk_ends[i]]
                     writer.write(c_a, t, int16_multiarray_cdr(chunk))
                 else:
                     writer.write(c_t, t, ts.serialize_cdr(Bool(data=(i == 0)), TRUTH_TYPE))
