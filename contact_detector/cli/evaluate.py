@@ -1,7 +1,8 @@
 """``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
 
-    contact-detector evaluate BAG_OR_DIR... [--detector forest|threshold|highpass|
-                              lowpass-bandpass|audio-onset|all ...] [--model M] [--report DIR]
+    contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-ft|threshold|highpass|
+                              lowpass-bandpass|audio-onset|all ...] [--model M] [--ft-model M]
+                              [--report DIR]
 
 Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), missed, late,
 premature (before the onset: the object is dropped), latency, and contact events blamed on
@@ -9,6 +10,9 @@ exogenous impacts (within [-50, +500] ms of an impact, outside the true contact)
 comes from the simulator's ``manifest.json`` beside the bags (onset, lift-off, impacts,
 condition) or, without one, from ``/contact_truth`` (onset only). Every detector sees the same
 decoded messages. With ``--report``: summary.md, metrics.json, per-trial rows and figures.
+``forest`` is ``--model``, else the shipped model the recording needs (the F/T-only one for a
+recording without the audio topic); ``forest-ft`` the F/T-only model on every recording. The
+models used are printed.
 """
 
 import argparse
