@@ -13,6 +13,7 @@ from sklearn.ensemble import RandomForestClassifier
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector, run_features
 from contact_detector.errors import ConfigError
+from contact_detector.features.batch import batch_features
 from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureConfig,
                                               PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.streaming import ForceTorqueStream, StreamingFeatureExtractor
@@ -121,6 +122,16 @@ def test_one_row_per_ft_feature_frame_at_its_last_sample():
     assert np.array_equal(frames.t, ft_t) and np.array_equal(frames.x, ft_x)
     assert frames.valid.all() and frames.names == CONFIG.feature_names
     assert frames.t[0] == t[FIRST]                  # from the first full window on
+
+
+def test_streaming_rows_match_the_batch_reference():
+    t, force, torque = _wrench(duration_s=3.0, knock_s=1.5)
+    stream = StreamingFeatureExtractor(config=CONFIG, audio_rate=16000.0).push_wrench(
+        t=t, force=force, torque=torque)
+    batch = batch_features(config=CONFIG, audio=np.zeros(16000), audio_rate=16000.0,
+                           audio_t0=T0, ft_t=t, force=force, torque=torque)
+    assert np.array_equal(stream.t, batch.t) and batch.valid.all()
+    np.testing.assert_allclose(stream.x, batch.x, rtol=1e-9, atol=1e-12)
 
 
 def test_sample_by_sample_equals_one_push_and_audio_is_ignored():

@@ -55,8 +55,9 @@ def test_detect_with_the_multimodal_model_says_which(no_audio, tmp_path, capsys)
     out = tmp_path / 'm.jsonl'
     assert cli_main.main(['detect', str(no_audio / 'trial_0001'), '--model',
                           str(default_model_path()), '--out', str(out)]) == 0
-    printed = capsys.readouterr().out
-    assert 'audio + F/T' in printed and 'contact_forest.npz' in printed
+    captured = capsys.readouterr()
+    assert 'audio + F/T' in captured.out and 'contact_forest.npz' in captured.out
+    assert 'no decision' in captured.err
     assert _rows(out) == []
 
 

@@ -219,6 +219,10 @@ def _detect(args: argparse.Namespace) -> int:
                 where = 'with' if has_audio else 'without'
                 print(f'model for recordings {where} {spec.audio_topic}: '
                       f'{make.describe(has_audio=has_audio)}')
+                if not has_audio and not make.bundle_for(has_audio=False).feature_config.ft_only:
+                    print(f'contact-detector detect: this model is clocked by audio frames and '
+                          f'recordings without {spec.audio_topic} give it none: no decision '
+                          '(leave --model out for the F/T-only model)', file=sys.stderr)
             run = detect_bag(bag=bag, make_detector=make, spec=spec, has_audio=has_audio)
             name = bag.name
             rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
