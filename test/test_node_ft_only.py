@@ -25,6 +25,7 @@ from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
 from contact_detector.ros.node import ContactDetectorNode
 from contact_detector.sim.trial import simulate_trial
+import node_support
 
 pytestmark = pytest.mark.rclpy
 
@@ -98,6 +99,11 @@ class FtHarness:
         self.wrench_pub.publish(msg)
         self.spin_until(lambda: self.node.wrench.received > n)
 
+    def send_audio(self, samples) -> None:
+        n = self.node.audio.received
+        self.audio_pub.publish(Int16MultiArray(data=samples.tolist()))
+        self.spin_until(lambda: self.node.audio.received > n)
+
     def close(self):
         self.executor.shutdown()
         self.node.destroy_node()
@@ -154,3 +160,41 @@ def test_audio_disabled_refuses_a_model_that_needs_audio(context):
                  Parameter('model.path', value=str(default_model_path()))]
     with pytest.raises(ConfigError, match='audio.enabled is false'):
         ContactDetectorNode(context=context, parameter_overrides=overrides)
+
+
+def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
+    trial = simulate_trial(**TRIAL)
+    h = FtHarness(context, **{'model.path': str(default_model_path()), 'audio.timeout_s': 0.3})
+    try:
+        h.spin_until(lambda: h.audio_pub.get_subscription_count() > 0)
+        stop = trial.onset_t - 1.2          # the audio publisher dies between the two knocks
+        events = node_support.trial_events(trial, t_from=trial.onset_t - 2.5,
+                                           t_to=trial.onset_t + 1.5)
+        frames_at_stop = release_at = None
+        for e in events:
+            tick = trial.start_time + np.floor((e.t - trial.start_time) / TICK_S) * TICK_S
+            if h.clock_t is None or tick > h.clock_t + 1e-9:
+                h.set_clock(tick)
+            if e.kind == 'audio':
+                if e.t < stop:
+                    h.send_audio(trial.audio[e.lo:e.hi])
+                continue
+            if frames_at_stop is None and e.t >= stop:
+                frames_at_stop = h.node.detector_counts()['contact_msgs']
+            h.send_wrench(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
+            if release_at is None and h.node.detector_counts()['release_msgs']:
+                release_at = e.t
+        counts = h.node.detector_counts()
+        assert trial.onset_t < release_at <= trial.onset_t + 0.5
+        # It kept deciding after the audio stopped, switched once, released once at the contact.
+        assert counts['contact_msgs'] > frames_at_stop + 200
+        assert counts['model_switches'] == 1 and counts['releases'] == 1
+        assert [m.data for m in h.release] == [True]
+        assert h.node.detector.active_name == 'F/T-only'
+        h.spin_until(lambda: any(
+            {kv.key: kv.value for kv in d.status[0].values}.get('model_active') == 'F/T-only'
+            for d in h.diag), timeout=5.0)
+        status = h.diag[-1].status[0]
+        assert 'F/T-only model active' in status.message
+    finally:
+        h.close()

@@ -50,6 +50,7 @@ from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
+from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
@@ -204,6 +205,9 @@ class ContactDetectorNode(Node):
         self.bundle = bundle
         # An F/T-only model: no audio subscription, frames are clocked by the wrench stream.
         self.use_audio = not bundle.feature_config.ft_only
+        # audio.timeout_s: the F/T-only model stands in while the audio is silent.
+        self.ft_bundle = (load_bundle(path=default_ft_model_path())
+                          if self.use_audio and cfg.audio_timeout_s > 0 else None)
         self.counts = {name: 0 for name in NODE_COUNTERS}
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
@@ -274,18 +278,25 @@ class ContactDetectorNode(Node):
             f'audio {self._audio_text()}; wrench {cfg.wrench_rate:g} Hz; '
             f'release {"armed" if self.detector.armed else "disarmed"}')
 
-    def _settings(self, *, rate: float, armed: bool) -> DetectorSettings:
+    def _settings(self, *, rate: float, armed: bool,
+                  bundle: Optional[ModelBundle] = None) -> DetectorSettings:
         cfg = self.config
         return DetectorSettings(
             audio_rate=rate, wrench_rate=cfg.wrench_rate, max_ft_age_s=cfg.max_ft_age_s,
             max_ft_wait_s=cfg.max_ft_wait_s, max_input_delay_s=cfg.max_input_delay_s,
             warmup_s=cfg.warmup_s, corrupt_holdoff_s=cfg.corrupt_holdoff_s, armed_on_start=armed,
-            rule=cfg.rule(self.bundle.decision_rule))
+            rule=cfg.rule((bundle or self.bundle).decision_rule))
 
-    def _build_detector(self, *, rate: float, armed: bool) -> ContactDetector:
+    def _build_detector(self, *, rate: float, armed: bool):
         try:
-            return ContactDetector(bundle=self.bundle,
-                                   settings=self._settings(rate=rate, armed=armed))
+            detector = ContactDetector(bundle=self.bundle,
+                                       settings=self._settings(rate=rate, armed=armed))
+            if self.ft_bundle is None:
+                return detector
+            fallback = ContactDetector(bundle=self.ft_bundle, settings=self._settings(
+                rate=rate, armed=False, bundle=self.ft_bundle))
+            return AudioFallback(primary=detector, fallback=fallback,
+                                 timeout_s=self.config.audio_timeout_s)
         except ConfigError as err:
             raise ConfigError(f'cannot run model {self.bundle.model_id} with audio at {rate:g} '
                               f'Hz and wrench.rate={self.config.wrench_rate:g} Hz: {err}'
@@ -483,6 +494,11 @@ class ContactDetectorNode(Node):
         if jumps != self._time_jumps_seen:
             self._time_jumps_seen = jumps
             self.get_logger().warning(f'{self.detector.last_error}; warming up again')
+        switches = getattr(self.detector, 'switch_messages', None)
+        if switches:
+            for line in switches:
+                self.get_logger().info(line)
+            switches.clear()
         n = len(decisions)
         if n == 0:
             return
@@ -573,11 +589,14 @@ class ContactDetectorNode(Node):
         if new is None or not any(p.name in PARAMS_BY_NAME for p in params):
             return
         old, self.config = self.config, new
-        det = self.detector
-        det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
-                               warmup_s=new.warmup_s, corrupt_holdoff_s=new.corrupt_holdoff_s,
-                               rule=new.rule(self.bundle.decision_rule))
-        det.set_rule(det.settings.rule)
+        pairs = ([(self.detector.primary, self.bundle), (self.detector.fallback, self.ft_bundle)]
+                 if isinstance(self.detector, AudioFallback) else [(self.detector, self.bundle)])
+        for det, bundle in pairs:
+            det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
+                                   warmup_s=new.warmup_s,
+                                   corrupt_holdoff_s=new.corrupt_holdoff_s,
+                                   rule=new.rule(bundle.decision_rule))
+            det.set_rule(det.settings.rule)
         if new.diagnostics_period_s != old.diagnostics_period_s:
             self.destroy_timer(self.diagnostics_timer)
             self.diagnostics_timer = self.create_timer(new.diagnostics_period_s,
@@ -616,6 +635,9 @@ class ContactDetectorNode(Node):
         values.update({
             'model_id': self.bundle.model_id,
             'model_path': self.model_path,
+            'model_active': (det.active_name if isinstance(det, AudioFallback)
+                             else 'audio + F/T' if self.use_audio else 'F/T-only'),
+            'fallback_model_id': self.ft_bundle.model_id if self.ft_bundle else 'none',
             'decision_rule': rule.describe(),
             'armed': str(det.armed),
             'audio_msg_type': cfg.audio_msg_type,
@@ -660,6 +682,9 @@ class ContactDetectorNode(Node):
         else:
             level, message = DiagnosticStatus.OK, (
                 f'running, release {"armed" if det.armed else "disarmed"}')
+        if isinstance(det, AudioFallback) and det.active is det.fallback:
+            message += '; F/T-only model active (no audio for audio.timeout_s)'
+            level = max(level, DiagnosticStatus.WARN)
         if level != DiagnosticStatus.OK:
             # Faults without a log line of their own (dropouts, stale input, clipping) show
             # up here, throttled like the others.
