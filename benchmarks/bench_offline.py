@@ -68,10 +68,12 @@ def cpu_name() -> str:
     return platform.processor() or platform.machine()
 
 
-def simulate(*, out: Path, n: int, seed: int, storage: str, audio_rate: int) -> List[Path]:
+def simulate(*, out: Path, n: int, seed: int, storage: str, audio_rate: int,
+             chunk_size: Optional[int] = None) -> List[Path]:
     """Write ``n`` trials of every condition set as bags plus a manifest; return the bags."""
     records = []
-    for trial in simulate_trials(n=n, seed=seed, conditions=['all'], audio_rate=audio_rate):
+    for trial in simulate_trials(n=n, seed=seed, conditions=['all'], audio_rate=audio_rate,
+                                 chunk_size=chunk_size):
         write_trial_bag(trial=trial, path=out / trial.name, storage=storage)
         records.append(manifest_entry(trial))
     write_manifest(trials=records, out_dir=out, settings={'seed': seed, 'trials': n})
@@ -157,8 +159,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--trials', type=int, default=60, help='held-out trials for (b)')
     parser.add_argument('--seed', type=int, default=1000,
                         help='simulator seed of the held-out set (not a training seed)')
-    parser.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
+    parser.add_argument('--storage', choices=('sqlite3', 'mcap', 'ros1'), default='sqlite3')
     parser.add_argument('--audio-rate', type=int, default=16000)
+    parser.add_argument('--chunk-size', type=int, default=None,
+                        help='audio samples per message (default: the condition sets '
+                             'chunking, 10 ms or odd)')
     parser.add_argument('--work', type=Path, default=None,
                         help='keep bags and the report here (default: a temporary directory)')
     parser.add_argument('--skip-rtf', action='store_true')
@@ -180,12 +185,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     emit('# bench_offline', '')
     emit(f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, {cpu_name()}, '
          f'{os.cpu_count()} cores, load {load[0]:.2f}, Python {platform.python_version()}; '
-         f'model `{model}`; {args.storage} bags, {args.audio_rate} Hz audio.', '')
+         f'model `{model}`; {args.storage} bags, {args.audio_rate} Hz audio'
+         + (f' in {args.chunk_size}-sample chunks' if args.chunk_size else '') + '.', '')
 
     if not args.skip_rtf:
         folder = work / 'rtf'
         bags = simulate(out=folder, n=args.rtf_trials, seed=args.seed + 1,
-                        storage=args.storage, audio_rate=args.audio_rate)
+                        storage=args.storage, audio_rate=args.audio_rate,
+                        chunk_size=args.chunk_size)
         rtf = real_time_factor(bags=bags, model=model, audio_rate=args.audio_rate)
         total_s = sum(r['duration_s'] for r in rtf['rows'])
         command_s = whole_command(folder=folder, model=model, out=work / 'rtf.jsonl')

@@ -16,6 +16,8 @@ import pytest
 
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 HERE = Path(__file__).resolve().parent
 #: Largest accepted delay from the true onset to the release message, s.
 LATENCY_BUDGET_S = 0.3

@@ -33,6 +33,8 @@ from contact_detector.ros.node import ContactDetectorNode
 from contact_detector.sim.trial import simulate_trial
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 TRIAL = dict(seed=3, index=21, hits='hand')
 LATENCY_BUDGET_S = 0.3
 DIAG_PERIOD_S = 0.5

@@ -516,8 +516,8 @@ def test_config_validation_names_the_field():
         FeatureConfig(audio_hop_s=0.1, audio_frame_s=0.05)
     with pytest.raises(ConfigError, match='extra_features'):
         FeatureConfig(extra_features=('nope',))
-    with pytest.raises(ConfigError, match='integer multiple'):
-        StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000, ft_input_rate=150)
+    with pytest.raises(ConfigError, match=r'wrench rate 20000 Hz is outside \[50, 10000\]'):
+        StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000, ft_input_rate=20000)
     assert FeatureConfig.from_dict(FeatureConfig().to_dict()) == FeatureConfig()
     with pytest.raises(ConfigError, match='unknown'):
         FeatureConfig.from_dict({'bogus': 1})

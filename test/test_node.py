@@ -39,6 +39,8 @@ from contact_detector.ros.params import PARAMS
 from contact_detector.sim.trial import simulate_trial
 import node_support
 
+pytestmark = pytest.mark.rclpy
+
 TICK_S = 0.01              # /clock period of the simulated bag player
 TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
 
@@ -313,13 +315,13 @@ def test_lazy_wrench_is_taken_with_the_next_audio(harness_factory, model, trial)
 
 @pytest.mark.parametrize('params, match', [
     ({'audio.sample_rate': 100.0}, 'audio.sample_rate'),
-    ({'audio.sample_rate': 44100}, 'audio.sample_rate.*decimal point'),
+    ({'audio.sample_rate': '44100'}, 'audio.sample_rate must be a float'),
     ({'audio.msg_type': 'sensor_msgs/msg/Image'}, 'audio.msg_type'),
     ({'audio.channels': 2, 'audio.channel': 2}, 'audio.channel=2'),
     ({'audio.stamp_source': 'header'}, 'audio.stamp_source'),
     ({'qos.reliability': 'sometimes'}, 'qos.reliability'),
     ({'release.threshold': 1.5}, 'release.threshold'),
-    ({'wrench.rate': 150.0}, 'integer multiple'),
+    ({'wrench.rate': 20000.0}, 'outside'),
 ])
 def test_invalid_parameters_refused_at_start(context, model, params, match):
     overrides = [Parameter('model.path', value=str(model))]
@@ -414,6 +416,31 @@ def test_stream_rate_change_rebuilds_the_detector(harness_factory, trial):
     assert 'audio at 50 Hz' in h.node.audio_refused
     h.send_audio(Int16MultiArray(data=[0] * 160))
     assert h.node.detector_counts()['audio_refused'] == 1
+
+
+def test_wrench_at_another_rate_than_configured_is_reported(harness_factory, trial):
+    """200 Hz wrench into a node set to 100 Hz: one WARN line, and WARN on /diagnostics."""
+    h = harness_factory()
+    t0 = trial.start_time
+    h.set_clock(t0 + 1.0)
+    logged = []
+    logger = h.node.get_logger()
+    original = logger.warning
+    logger.warning = lambda text, *a, **k: (logged.append(text), original(text, *a, **k))
+    for k in range(100):                        # 0.5 s of 200 Hz samples
+        h.send_wrench(wrench_msg(t0 + 0.5 + k / 200.0, trial.force[0], trial.torque[0]))
+    for _ in range(2):
+        h.node.diagnostics()
+    status, values = diag_values_of(h.node.diagnostics())
+    assert status.level == DiagnosticStatus.WARN
+    assert 'wrench arrives at 200 Hz but wrench.rate is 100 Hz' in status.message
+    assert float(values['wrench_measured_rate_hz']) == pytest.approx(200.0, rel=1e-3)
+    assert sum('wrench arrives at' in text for text in logged) == 1     # one line, not a flood
+
+
+def diag_values_of(array):
+    status = array.status[0]
+    return status, {kv.key: kv.value for kv in status.values}
 
 
 @pytest.mark.skipif(importlib.util.find_spec('audio_common_msgs') is not None,

@@ -38,8 +38,8 @@ def test_detect_uses_the_shipped_ft_model_without_audio(no_audio, tmp_path, caps
     out = tmp_path / 'd.jsonl'
     assert cli_main.main(['detect', str(bag), '--out', str(out)]) == 0
     printed = capsys.readouterr().out
-    assert 'without /audio' in printed and 'contact_forest_ft.npz' in printed
-    assert 'F/T-only' in printed
+    assert 'without an audio topic' in printed and 'contact_forest_ft.npz' in printed
+    assert 'F/T-only' in printed and 'no audio topic' in printed       # discovery's summary
     rows = _rows(out)
     frames = [r for r in rows if 'p' in r]
     releases = [r for r in rows if r.get('event') == 'release']
@@ -49,16 +49,17 @@ def test_detect_uses_the_shipped_ft_model_without_audio(no_audio, tmp_path, caps
     assert times == sorted(times)
 
 
-def test_detect_with_the_multimodal_model_says_which(no_audio, tmp_path, capsys):
-    # --model wins: the multimodal model decides nothing without audio frames (and says so).
+def test_a_multimodal_model_refuses_a_recording_without_audio(no_audio, tmp_path, capsys):
+    # --model wins, and a model that needs audio cannot decide such a recording: an error.
     from contact_detector.model.bundle import default_model_path
     out = tmp_path / 'm.jsonl'
     assert cli_main.main(['detect', str(no_audio / 'trial_0001'), '--model',
-                          str(default_model_path()), '--out', str(out)]) == 0
-    captured = capsys.readouterr()
-    assert 'audio + F/T' in captured.out and 'contact_forest.npz' in captured.out
-    assert 'no decision' in captured.err
-    assert _rows(out) == []
+                          str(default_model_path()), '--out', str(out)]) == 1
+    assert 'no audio' in capsys.readouterr().err
+    assert not out.exists()
+    assert cli_main.main(['evaluate', str(no_audio / 'trial_0001'), '--model',
+                          str(default_model_path())]) == 1
+    assert 'no audio' in capsys.readouterr().err
 
 
 def test_audio_disabled_in_params_picks_the_ft_model_for_audio_bags(tmp_path, capsys):
@@ -80,7 +81,7 @@ def test_evaluate_shows_the_ft_model_beside_the_others(no_audio, tmp_path, capsy
     table = captured.out
     for name in ('| forest |', '| forest-ft |', '| threshold |'):
         assert name in table
-    assert 'forest on recordings without /audio' in captured.err
+    assert 'forest on recordings without an audio topic' in captured.err
     assert 'contact_forest_ft.npz' in captured.err
     metrics = json.loads((report / 'metrics.json').read_text())
     # Without audio, forest is the F/T-only model: the same outcomes as forest-ft.
@@ -107,3 +108,9 @@ def test_train_no_audio_refuses_audio_features(no_audio, tmp_path, capsys):
                           'audio_peak_rel_db,force_shift', '--out',
                           str(tmp_path / 'x.npz')]) == 1
     assert 'audio_peak_rel_db' in capsys.readouterr().err
+
+
+def test_train_with_audio_features_refuses_a_recording_without_audio(no_audio, tmp_path,
+                                                                     capsys):
+    assert cli_main.main(['train', str(no_audio), '--out', str(tmp_path / 'x.npz')]) == 1
+    assert 'no audio' in capsys.readouterr().err

@@ -28,9 +28,15 @@ want="$(cat "$root/setup.py" "$root/tools/setup.sh" | sha256sum | cut -d' ' -f1)
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "setup: installing contact_detector and its dependencies into $venv"
   # pip's notes about this machine's local index folders are noise here.
-  "$venv/bin/python" -m pip install --quiet -e "$root[ros,train,safe,test]" 2>&1 \
+  "$venv/bin/python" -m pip install --quiet -e "$root[ros,train,safe,test,colcon]" 2>&1 \
     | grep -vE "is ignored: it is neither|BuildBackendWarning|warnings.warn" || true
-  "$venv/bin/python" -c 'import contact_detector, rclpy, rosbags, sklearn' || {
+  "$venv/bin/python" -c 'import contact_detector, rclpy, rosbags, sklearn, soundfile' || {
     echo "setup: the install failed (see above)" >&2; exit 1; }
   echo "$want" > "$stamp"
+fi
+# The real recorded sounds of the simulator's 'real_sounds' family (cached, idempotent). A
+# failure leaves that family unavailable (its tests skip, except under CI) and nothing else.
+if ! CONTACT_DETECTOR_VENV="$venv" "$root/tools/fetch_sounds.sh" >/dev/null; then
+  echo "setup: the real sound bank was not fetched; the simulator's 'real_sounds' family" \
+    "needs it (run tools/fetch_sounds.sh)" >&2
 fi

@@ -1,7 +1,12 @@
 """``contact-detector detect``: run the node's processing on bags, in bag time.
 
     contact-detector detect BAG_OR_DIR... [--model M] [--params P] [--wrench-topic T]
-                            [--audio-topic T] [--audio-rate HZ] --out FILE.jsonl
+                            [--audio-topic T] [--audio-rate HZ] [--wrench-rate HZ]
+                            [--audio-coding pcm|mp3] --out FILE.jsonl
+
+Bags are rosbag2 directories (sqlite3, mcap) or ROS 1 ``.bag`` files. The wrench and audio
+topics, the audio format and the F/T rate are found in each bag
+(:mod:`contact_detector.io.discovery`) and printed; the options override what is found.
 
 Writes one JSON object per line: for every audio frame
 ``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
@@ -11,10 +16,12 @@ F/T-only model). Each bag starts a fresh detector, armed. A recording without th
 is decided by the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the
 command prints which model it used. ``--params`` reads the node's YAML parameter file (the
 ``contact_detector_node: ros__parameters:`` section), so offline runs use the robot's settings;
-``--audio-rate`` overrides ``audio.sample_rate``.
+its ``audio.sample_rate`` serves bags that do not describe their audio, and ``--audio-rate``
+overrides both.
 """
 
 import argparse
+import dataclasses
 import json
 from pathlib import Path
 import sys
@@ -26,7 +33,8 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError, ContactDetectorError
-from contact_detector.io.bags import find_bags, topic_types
+from contact_detector.io.bags import find_bags, manifest_entry
+from contact_detector.io.discovery import discover_streams, Streams, summary_lines
 from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, default_ft_model_path,
@@ -102,10 +110,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              'with audio.enabled false in --params, the shipped F/T-only '
                              'model)')
     parser.add_argument('--params', type=Path, default=None, help='node parameter YAML')
-    parser.add_argument('--wrench-topic', default='/wrist_wrench')
-    parser.add_argument('--audio-topic', default='/audio')
-    parser.add_argument('--audio-rate', type=float, default=None,
-                        help='audio sample rate, Hz (overrides audio.sample_rate)')
+    add_stream_arguments(parser)
     parser.add_argument('--out', type=Path, required=True, help='JSONL output file')
     args = parser.parse_args(argv)
     try:
@@ -172,16 +177,94 @@ class DetectorFactory:
         kind = 'F/T-only' if bundle.feature_config.ft_only else 'audio + F/T'
         return f'{self.path_for(has_audio=has_audio)} ({bundle.model_id}, {kind})'
 
-    def __call__(self, *, has_audio: bool = True) -> ContactDetector:
-        """Return a fresh, armed detector for a recording with (or without) audio."""
+    @property
+    def decides_without_audio(self) -> bool:
+        """Whether recordings without an audio topic get an F/T-only model."""
+        return self.bundle_for(has_audio=False).feature_config.ft_only
+
+    def __call__(self, streams: Optional[Streams] = None, *,
+                 has_audio: bool = True) -> ContactDetector:
+        """
+        Return a fresh, armed detector for a recording with (or without) audio.
+
+        Given a bag's :class:`Streams`, the recording has audio if it has an audio topic, and
+        the detector runs at that bag's audio and F/T rates.
+        """
+        if streams is not None:
+            has_audio = streams.has_audio
         bundle = self.bundle_for(has_audio=has_audio)
         settings = self._loaded[self.path_for(has_audio=has_audio)][1]
+        if streams is not None:
+            rates = {'wrench_rate': streams.wrench_rate}
+            if streams.audio_rate is not None:
+                rates['audio_rate'] = streams.audio_rate
+            settings = dataclasses.replace(settings, **rates)
         return ContactDetector(bundle=bundle, settings=settings)
+
+
+def add_stream_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options that override what discovery finds in a bag."""
+    parser.add_argument('--wrench-topic', default=None,
+                        help='wrench topic (default: the one WrenchStamped topic)')
+    parser.add_argument('--audio-topic', default=None,
+                        help='audio topic (default: the one topic of a supported audio type)')
+    parser.add_argument('--audio-rate', type=float, default=None, metavar='HZ',
+                        help='audio sample rate (default: from AudioInfo / AudioStamped, '
+                             'else audio.sample_rate of --params, else estimated)')
+    parser.add_argument('--wrench-rate', type=float, default=None, metavar='HZ',
+                        help='F/T rate (default: measured from the header stamps)')
+    parser.add_argument('--audio-coding', choices=('pcm', 'mp3'), default=None,
+                        help='AudioData payload (default: from AudioInfo, else pcm)')
+
+
+def discover_all(bags: Sequence[Path], *, args: argparse.Namespace, params: dict,
+                 prog: str, allow_no_audio: bool = False) -> list:
+    """
+    Discover every bag's streams (flags override); print what was found; return the list.
+
+    ``allow_no_audio``: the caller decides recordings without an audio topic with an F/T-only
+    model, so such a bag is no error (its :class:`Streams` has ``audio_topic`` None).
+
+    Returns
+    -------
+    list of (Path, Streams)
+
+    """
+    msg_type = params.get('audio.msg_type')
+    found = []
+    for bag in bags:
+        # A simulator manifest beside the bag knows its rate; a parameter file is the robot's.
+        entry = manifest_entry(bag)
+        hint = (entry['audio_rate'], 'manifest') if entry and 'audio_rate' in entry else (
+            params.get('audio.sample_rate'), 'parameters')
+        found.append((bag, discover_streams(
+            bag, wrench_topic=args.wrench_topic, audio_topic=args.audio_topic,
+            audio_msg_type=msg_type or None, audio_rate=args.audio_rate,
+            wrench_rate=getattr(args, 'wrench_rate', None),
+            param_audio_rate=hint[0], param_source=hint[1],
+            channels=int(params['audio.channels']) if 'audio.channels' in params else None,
+            coding=getattr(args, 'audio_coding', None), allow_no_audio=allow_no_audio)))
+    for line in summary_lines(found):
+        print(f'{prog}: {line}')
+    return found
+
+
+def stream_spec(streams: Streams, stream: dict) -> StreamSpec:
+    """Return the StreamSpec of a discovered bag (``stream``: the parameter file's fields)."""
+    return StreamSpec(wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,
+                      audio_msg_type=streams.audio_msg_type, channels=streams.channels,
+                      channel=stream.get('channel'), coding=streams.coding,
+                      audio_rate=streams.audio_rate)
 
 
 def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path],
                            audio_rate: Optional[float]):
-    """Return (make_detector, stream_fields) from a model path and node parameters."""
+    """
+    Return (make_detector, stream_fields) from a model path and node parameters.
+
+    ``make_detector(streams=None)`` builds a fresh detector; given a bag's :class:`Streams`,
+    with that bag's audio and F/T rates.
+    """
     params = read_node_params(params_file) if params_file else {}
     settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
     path = model or (Path(model_param) if model_param else None)
@@ -191,39 +274,33 @@ def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path]
     return make, stream
 
 
-def has_audio_topic(bag: Path, *, spec: StreamSpec) -> bool:
-    """Whether the recording has the audio topic at all (else the F/T-only model is used)."""
-    return spec.audio_topic in topic_types(bag)
-
-
 def detect_bag(*, bag: Path, make_detector, spec: StreamSpec,
-               has_audio: bool = True) -> Run:
-    """Run a fresh, armed detector over one bag."""
-    return run_detector(sensor_events(bag, spec=spec),
-                        detector=make_detector(has_audio=has_audio))
+               streams: Optional[Streams] = None) -> Run:
+    """Run a fresh, armed detector over one bag (with its discovered rates, if given)."""
+    detector = make_detector(streams) if streams is not None else make_detector()
+    return run_detector(sensor_events(bag, spec=spec), detector=detector)
 
 
 def _detect(args: argparse.Namespace) -> int:
     make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                           audio_rate=args.audio_rate)
-    spec = StreamSpec(wrench_topic=args.wrench_topic, audio_topic=args.audio_topic, **stream)
-    bags = find_bags(args.bags)
+    params = read_node_params(args.params) if args.params else {}
+    found = discover_all(find_bags(args.bags), args=args, params=params,
+                         prog='contact-detector detect',
+                         allow_no_audio=make.decides_without_audio)
+    bags = [bag for bag, _ in found]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     frames = releases = 0
     used = set()
     with args.out.open('w') as out:
-        for bag in tqdm(bags, desc='detect', unit='bag', disable=len(bags) < 2):
-            has_audio = has_audio_topic(bag, spec=spec)
-            if has_audio not in used:
-                used.add(has_audio)
-                where = 'with' if has_audio else 'without'
-                print(f'model for recordings {where} {spec.audio_topic}: '
-                      f'{make.describe(has_audio=has_audio)}')
-                if not has_audio and not make.bundle_for(has_audio=False).feature_config.ft_only:
-                    print(f'contact-detector detect: this model is clocked by audio frames and '
-                          f'recordings without {spec.audio_topic} give it none: no decision '
-                          '(leave --model out for the F/T-only model)', file=sys.stderr)
-            run = detect_bag(bag=bag, make_detector=make, spec=spec, has_audio=has_audio)
+        for bag, streams in tqdm(found, desc='detect', unit='bag', disable=len(bags) < 2):
+            if streams.has_audio not in used:
+                used.add(streams.has_audio)
+                where = 'with' if streams.has_audio else 'without'
+                print(f'model for recordings {where} an audio topic: '
+                      f'{make.describe(has_audio=streams.has_audio)}')
+            run = detect_bag(bag=bag, make_detector=make, spec=stream_spec(streams, stream),
+                             streams=streams)
             name = bag.name
             rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
                                    'contact': bool(c)})

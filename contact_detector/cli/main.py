@@ -12,6 +12,7 @@ COMMANDS = {
     'features': ('features', 'run the feature core on a generated signal and report it'),
     'train': ('train', "train the contact forest on bags (the paper's protocol)"),
     'detect': ('detect', "run the node's processing on bags, write JSONL decisions"),
+    'label': ('label', "propose each recording's contact onset (hindsight), write a labels CSV"),
     'evaluate': ('evaluate', 'event metrics of the forest and the baselines against truth'),
     'replay': ('replay', 'publish a bag into the live ROS graph with its original timing'),
     'sweep': ('sweep', 'sweep feature and decision settings on held-out trials'),

@@ -18,8 +18,9 @@ import numpy as np
 
 from contact_detector.errors import ContactDetectorError
 from contact_detector.features.config import FeatureConfig
-from contact_detector.io.bags import (find_bags, manifest_entry, read_audio, read_truth,
-                                      read_wrench)
+from contact_detector.io.bags import find_bags, manifest_entry, read_truth, read_wrench
+from contact_detector.io.discovery import discover_streams
+from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
 
 PROG = 'contact-detector plot'
 PHASE_COLOURS = {'rest': '#eeeeee', 'lift': '#d9e8f5', 'hold': '#f3f3e0',
@@ -34,15 +35,19 @@ def build_parser() -> argparse.ArgumentParser:
         description="Plot a bag like the paper's figure 4: |F|, |T|, their spectrograms and "
                     'spectral features, audio and its power.')
     parser.add_argument('bag', metavar='BAG',
-                        help='rosbag2 directory (or a directory with exactly one bag)')
+                        help='rosbag2 directory or ROS 1 .bag file (or a directory with '
+                             'exactly one bag)')
     parser.add_argument('-o', '--output', required=True, type=Path, metavar='PNG',
                         help='output image (png, pdf or svg by suffix)')
     parser.add_argument('--feature-config', type=Path, default=None, metavar='FILE',
                         help='JSON (or YAML) FeatureConfig; top level or under "features"')
     parser.add_argument('--audio-rate', type=float, default=None, metavar='HZ',
-                        help='audio sample rate (default: from the manifest, else 16000)')
-    parser.add_argument('--wrench-topic', default='/wrist_wrench')
-    parser.add_argument('--audio-topic', default='/audio')
+                        help='audio sample rate (default: from the bag, else the manifest, '
+                             'else estimated)')
+    parser.add_argument('--wrench-topic', default=None,
+                        help='wrench topic (default: the one WrenchStamped topic)')
+    parser.add_argument('--audio-topic', default=None,
+                        help='audio topic (default: the one topic of a supported audio type)')
     parser.add_argument('--title', default=None)
     parser.add_argument('--dpi', type=int, default=110)
     return parser
@@ -107,7 +112,7 @@ def _features_panel(ax, frames, prefix: str, t_ref: float) -> None:
 
 
 def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: float | None = None,
-             wrench_topic: str = '/wrist_wrench', audio_topic: str = '/audio',
+             wrench_topic: str | None = None, audio_topic: str | None = None,
              title: str | None = None, dpi: int = 110) -> Path:
     """
     Draw the figure for one bag and save it to ``output``.
@@ -127,20 +132,26 @@ def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: floa
         raise ContactDetectorError(f'feature code unavailable: {err}') from err
 
     entry = manifest_entry(bag)
-    wrench = read_wrench(bag, topic=wrench_topic)
-    audio = read_audio(bag, topic=audio_topic)
-    rate = float(audio_rate or (entry or {}).get('audio_rate') or 16000.0)
-    ft_rate = float(1.0 / np.median(np.diff(wrench.t))) if len(wrench.t) > 1 else 100.0
+    streams = discover_streams(bag, wrench_topic=wrench_topic, audio_topic=audio_topic,
+                               audio_rate=audio_rate,
+                               param_audio_rate=(entry or {}).get('audio_rate'))
+    for line in streams.warnings:
+        print(f'{PROG}: warning: {line}', file=sys.stderr)
+    print(f'{PROG}: {bag.name}: {streams.describe()}')
+    wrench = read_wrench(bag, topic=streams.wrench_topic)
+    rate = streams.audio_rate
+    audio = read_audio_series(bag, spec=StreamSpec(
+        wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,
+        audio_msg_type=streams.audio_msg_type, channels=streams.channels,
+        coding=streams.coding, audio_rate=rate))
+    ft_rate = streams.wrench_rate
     audio_t0 = float(entry['start_time']) if entry else audio.t0(rate)
     truth = [t for t, value in read_truth(bag) if value]
     if not truth and entry:
         truth = [entry['onset_t']]
     t_ref = float(entry['start_time']) if entry else float(min(wrench.t[0], audio_t0))
 
-    cfg = config
-    if abs(cfg.ft_rate_hz - ft_rate) > 1e-6 and ft_rate % cfg.ft_rate_hz > 1e-6:
-        cfg = FeatureConfig.from_dict({**config.to_dict(), 'ft_rate_hz': ft_rate})
-    frames = batch_features(config=cfg, audio=audio.samples, audio_rate=rate, audio_t0=audio_t0,
+    frames = batch_features(config=config, audio=audio.samples, audio_rate=rate, audio_t0=audio_t0,
                             ft_t=wrench.t, force=wrench.force, torque=wrench.torque,
                             ft_input_rate=ft_rate)
 
@@ -180,9 +191,9 @@ def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: floa
     _features_panel(ax_tf, frames, 'torque', t_ref)
     ax_tf.set_title('(e) torque spectral features', loc='left', fontsize=9)
     # (f) audio + power
-    ax_a.plot(ta, audio.samples / 32768.0, color='0.5', lw=0.3)
+    ax_a.plot(ta, audio.samples, color='0.5', lw=0.3)
     ax_a.set_ylabel('audio (FS)')
-    peak = float(np.max(np.abs(audio.samples))) / 32768.0 if len(audio.samples) else 1.0
+    peak = float(np.max(np.abs(audio.samples))) if len(audio.samples) else 1.0
     ax_a.set_ylim(-1.1 * max(peak, 0.01), 1.1 * max(peak, 0.01))
     ax_p = ax_a.twinx()
     power = frames.x[:, list(frames.names).index('audio_power')]

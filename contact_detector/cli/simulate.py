@@ -15,8 +15,7 @@ from typing import Sequence
 from tqdm import tqdm
 
 from contact_detector.errors import ContactDetectorError
-from contact_detector.sim.bag_writer import (manifest_entry, STORAGES, write_manifest,
-                                             write_trial_bag)
+from contact_detector.sim.bag_writer import STORAGES, write_trials
 from contact_detector.sim.conditions import ALIASES, CONDITION_SETS, resolve_conditions
 from contact_detector.sim.trial import simulate_trial, simulate_trials
 
@@ -32,7 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
                     'as rosbag2 plus a JSON manifest.',
         epilog=f'Condition sets: {sets}. Aliases: all: the six original sets (paper to '
                f'odd_chunking); families: the six families (geometry to quiet_contact); wide: '
-               f'all twelve. Trial i uses condition i mod len(conditions); within a set the '
+               f'those twelve. real_sounds (recorded sounds) needs tools/fetch_sounds.sh '
+               f'first. Trial i uses condition i mod len(conditions); within a set the '
                f'exogenous hits cycle hand, table, none (exogenous: mixed, touch, brush, '
                f'setdown).')
     parser.add_argument('out_dir', metavar='OUT_DIR', type=Path,
@@ -42,7 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--seed', type=int, default=0, metavar='S',
                         help='random seed (default 0); trial i uses default_rng([S, i])')
     parser.add_argument('--storage', choices=sorted(STORAGES), default='sqlite3',
-                        help='rosbag2 storage plugin (default sqlite3)')
+                        help='rosbag2 storage plugin, or ros1 for ROS 1 .bag files '
+                             '(default sqlite3)')
     parser.add_argument('--audio-rate', type=int, default=16000, metavar='HZ',
                         help='microphone sample rate (default 16000)')
     parser.add_argument('--ft-rate', type=float, default=100.0, metavar='HZ',
@@ -97,20 +98,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(str(err))
     try:
         _prepare(args.out_dir, overwrite=args.overwrite)
-        records = []
         trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window)
-        for trial in tqdm(trials, total=args.trials, desc='simulate', unit='trial',
-                          disable=args.quiet):
-            write_trial_bag(trial=trial, path=args.out_dir / trial.name, storage=args.storage)
-            records.append(manifest_entry(trial))
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
                     'chunk_size': args.chunk_size, 'label_window_s': args.label_window}
-        manifest = write_manifest(trials=records, out_dir=args.out_dir, settings=settings)
+        records, manifest = write_trials(
+            trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
+                        disable=args.quiet),
+            out_dir=args.out_dir, storage=args.storage, settings=settings)
     except ContactDetectorError as err:
         print(f'{PROG}: error: {err}', file=sys.stderr)
         return 1

@@ -146,6 +146,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo-settings', default=','.join(LOFO_SETTINGS),
                         help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)})')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
+    parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
+                        help='--lofo: frames up to this long after the onset are labelled '
+                             f'contact, s (default {STATE.end_s})')
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
@@ -214,6 +217,9 @@ _SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_m
 #: The feature settings --lofo compares: name -> columns (None: the shipped model's).
 LOFO_SETTINGS = {
     'shipped': None,
+    'round5': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
+        'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
+        'ft_change_angle', 'force_change_max', 'torque_change_max'),
     'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
@@ -222,7 +228,7 @@ LOFO_SETTINGS = {
 
 
 def lofo_rules() -> List[DecisionRule]:
-    """The rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
     rules = [DEFAULT_RULE]
     rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
     rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
@@ -248,7 +254,8 @@ def lofo(args, spec) -> str:
                     'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
     for name in tqdm(args.lofo_settings.split(','), desc='lofo', unit='setting'):
         columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
-        setting = FeatureSetting(name, config, STATE, columns=tuple(columns))
+        setting = FeatureSetting(name, config, LabelWindow(0.0, args.lofo_label_end),
+                                 columns=tuple(columns))
         folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                      n_estimators=args.trees, seed=args.seed, jobs=args.jobs)
         for k, rule in enumerate(rules):

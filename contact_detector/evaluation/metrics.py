@@ -32,7 +32,8 @@ class Truth:
     contact_end_t : float or None
         Lift-off, seconds, when known.
     impacts : tuple of (float, str, bool)
-        Exogenous impacts: time, kind ('hand' or 'table'), whether the object was in the air.
+        Exogenous impacts: time (start), kind ('hand', 'table', 'touch', 'brush', 'setdown'),
+        whether the object was in the air. Every kind is blamed the same way.
 
     """
 
@@ -103,6 +104,58 @@ def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[flo
                    release_t=release, latency_s=latency, verdict=verdict, impact_events=blamed,
                    impacts=len(truth.impacts),
                    impacts_in_air=sum(1 for _, _, air in truth.impacts if air))
+
+
+def score_onsets(*, name: str, condition: str, onsets: Sequence[float],
+                 events: Sequence[float], tolerance_s: float = ONSET_TOLERANCE_S,
+                 late_s: float = LATE_S) -> List[Outcome]:
+    """
+    Score a recording with one or several labelled contacts, one Outcome per onset.
+
+    A recording of a user's robot may hold many placements (a labels CSV with several rows
+    for one bag). Each onset is scored as if the detector had been re-armed for it: onset
+    ``k`` owns the contact events in ``[o_{k-1} + late_s, o_{k+1} - tolerance_s)`` (open at
+    the recording's ends) after the release of onset ``k - 1`` (an event releases once), and
+    the first of them is its release, judged as in
+    :func:`score_trial`: before ``o_k - tolerance_s`` premature, up to ``o_k + late_s``
+    detected, later late, none missed. With one onset this is :func:`score_trial` with the
+    first event as the release (a fresh detector is armed, so its first event releases).
+
+    Parameters
+    ----------
+    name, condition : str
+        The recording's name and condition; outcome ``k`` is named ``name#k`` (from 1) when
+        there are several onsets.
+    onsets : sequence of float
+        Labelled onsets, seconds (bag time), any order.
+    events : sequence of float
+        Every confirmed contact event of the run, seconds.
+    tolerance_s, late_s : float
+        As in :func:`score_trial`.
+
+    Returns
+    -------
+    list of Outcome
+        In onset order; ``extra`` holds ``{'recording': name, 'contact': k}``.
+
+    """
+    order = sorted(float(o) for o in onsets)
+    times = np.sort(np.asarray(events, dtype=float))
+    outcomes = []
+    used = -np.inf
+    for k, onset in enumerate(order):
+        lo = order[k - 1] + late_s if k > 0 else -np.inf
+        hi = order[k + 1] - tolerance_s if k + 1 < len(order) else np.inf
+        mine = times[(times >= lo) & (times < hi) & (times > used)]
+        if mine.size:
+            used = mine[0]
+        label = f'{name}#{k + 1}' if len(order) > 1 else name
+        outcome = score_trial(truth=Truth(name=label, condition=condition, onset_t=onset),
+                              releases=mine[:1].tolist(), events=(),
+                              tolerance_s=tolerance_s, late_s=late_s)
+        outcome.extra = {'recording': name, 'contact': k + 1}
+        outcomes.append(outcome)
+    return outcomes
 
 
 def summarize(outcomes: Sequence[Outcome]) -> Dict[str, object]:

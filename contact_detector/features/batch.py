@@ -14,6 +14,7 @@ import numpy as np
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
                                               SHIFT_FEATURES)
+from contact_detector.features.resample import integer_ratio, WrenchResampler
 from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
 
 
@@ -85,7 +86,8 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     force, torque : np.ndarray, shape (n, 3)
         N and N m.
     ft_input_rate : float or None
-        Input rate; decimated by block means to ``config.ft_rate_hz``.
+        Input rate; decimated by block means to ``config.ft_rate_hz`` where it is an integer
+        multiple, else resampled by :class:`~contact_detector.features.resample.WrenchResampler`.
 
     Returns
     -------
@@ -95,11 +97,17 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     columns : tuple of str
 
     """
-    m = int(round((ft_input_rate or config.ft_rate_hz) / config.ft_rate_hz))
-    n_blocks = len(ft_t) // m
-    dec_t = np.array([ft_t[b * m + m - 1] for b in range(n_blocks)])
+    rate = ft_input_rate or config.ft_rate_hz
+    m = integer_ratio(input_rate=rate, output_rate=config.ft_rate_hz)
     values = np.concatenate([force, torque], axis=1).astype(np.float64)
-    dec = np.array([values[b * m:(b + 1) * m].mean(axis=0) for b in range(n_blocks)])
+    if m:
+        n_blocks = len(ft_t) // m
+        dec_t = np.array([ft_t[b * m + m - 1] for b in range(n_blocks)])
+        dec = np.array([values[b * m:(b + 1) * m].mean(axis=0) for b in range(n_blocks)])
+    else:
+        dec_t, dec = WrenchResampler(input_rate=rate, output_rate=config.ft_rate_hz).push(
+            t=np.asarray(ft_t, dtype=np.float64), values=values)
+        n_blocks = len(dec_t)
     if n_blocks == 0:
         dec = np.zeros((0, 6))
     mags = [np.linalg.norm(dec[:, :3], axis=1), np.linalg.norm(dec[:, 3:], axis=1)]

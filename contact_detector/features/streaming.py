@@ -17,7 +17,6 @@ stamps, bag log times); nothing here reads a clock. The batch reference in
 """
 
 from bisect import bisect_left
-from collections import deque
 from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
@@ -28,9 +27,13 @@ from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
                                               FeatureConfig, PAPER_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.resample import WrenchResampler
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
+
+
+_max_reduce = np.maximum.reduce
 
 
 class TimeJumpError(InputError):
@@ -392,8 +395,10 @@ class ForceTorqueStream:
     """
     Spectral features of |F| and |T| over a sliding DFT window.
 
-    Input at ``input_rate`` (an integer multiple M of ``ft_rate_hz``) is averaged over blocks of
-    M samples (the block's time is its last sample's). A feature frame ends at every
+    Input at ``input_rate`` is first brought onto the ``ft_rate_hz`` grid by
+    :class:`~contact_detector.features.resample.WrenchResampler` (an integer multiple M is
+    averaged over blocks of M samples timed at their last sample; any other rate from 50 Hz to
+    10 kHz is box-filtered and interpolated). A feature frame ends at every
     ``ft_hop``-th decimated sample once ``ft_window`` samples (and the delta history) are
     there; its time is the time of its last sample.
 
@@ -413,13 +418,10 @@ class ForceTorqueStream:
 
     def __init__(self, *, config: FeatureConfig, input_rate: float,
                  gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
-        ratio = input_rate / config.ft_rate_hz if config.ft_rate_hz else 0.0
-        if not math.isfinite(ratio) or ratio < 1 or abs(ratio - round(ratio)) > 1e-6:
-            raise ConfigError(f'wrench rate {input_rate} Hz must be an integer multiple of the '
-                              f'feature rate ft_rate_hz={config.ft_rate_hz} Hz')
+        self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz)
         self.config = config
         self.input_rate = float(input_rate)
-        self.decimation = int(round(ratio))
+        self.decimation = self._resampler.block     # 0: not an integer ratio (interpolated)
         self.gap_reset_s = max(gap_reset_s, 1.5 / input_rate)
         self.backjump_tolerance_s = backjump_tolerance_s
         self.use_delta = [name for name in config.extra_features if name in DELTA_FEATURES]
@@ -437,11 +439,11 @@ class ForceTorqueStream:
         self._want_change = bool(wanted & set(CHANGE_FEATURES))
         self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
         # (force_change, torque_change) of the frames before the newest, for *_change_max.
-        self._recent_changes: deque = deque(maxlen=config.change_max_frames - 1)
+        self._recent_changes = TailBuffer(capacity=config.change_max_frames, width=2)
         self._want_shift = bool(wanted & set(SHIFT_FEATURES))
         # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
-        self._recent_shifts: deque = deque(
-            maxlen=max(config.change_max_frames, config.shift_min_frames) - 1)
+        self._recent_shifts = TailBuffer(
+            capacity=max(config.change_max_frames, config.shift_min_frames), width=2)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
@@ -458,8 +460,7 @@ class ForceTorqueStream:
 
     def _restart(self) -> None:
         # Forget the window, previous spectra and partial block; keep the last stamp.
-        self._block_t = np.zeros(0)
-        self._block_v = np.zeros((0, 6))
+        self._resampler.reset()
         self._mags.clear()                  # |F|, |T| of the newest decimated samples
         self._mag_ts.clear()                # their times
         self._mag_start = 0                 # decimated index of the oldest sample kept
@@ -557,38 +558,30 @@ class ForceTorqueStream:
 
     def _change_max(self, change: np.ndarray) -> np.ndarray:
         # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.
-        before = np.array(self._recent_changes, dtype=float).reshape(-1, 2)
-        peak = running_max(values=change, before=before,
-                           window=self.config.change_max_frames)
-        self._recent_changes.extend(map(tuple, change.tolist()))
+        window = self.config.change_max_frames
+        peak = running_max(values=change, before=self._recent_changes.view, window=window)
+        self._recent_changes.extend(change)
+        self._recent_changes.keep_last(window - 1)
         return peak
 
     def _shift_extremes(self, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # *_shift_min and *_shift_max of the (m, 2) new shifts; keeps the newest for the next call
-        before = np.array(self._recent_shifts, dtype=float).reshape(-1, 2)
+        before = self._recent_shifts.view
         n_before = before.shape[0]
         k_min, k_max = self.config.shift_min_frames, self.config.change_max_frames
         low = -running_max(values=-shift, before=-before[max(0, n_before - k_min + 1):],
                            window=k_min)
         high = running_max(values=shift, before=before[max(0, n_before - k_max + 1):],
                            window=k_max)
-        self._recent_shifts.extend(map(tuple, shift.tolist()))
+        self._recent_shifts.extend(shift)
+        self._recent_shifts.keep_last(max(k_min, k_max) - 1)
         return low, high
 
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        m = self.decimation
-        if m == 1:
-            bt, bv = t, v           # no partial block is ever left: nothing to prepend
-        else:
-            bt = np.concatenate([self._block_t, t])
-            bv = np.concatenate([self._block_v, v])
-        n_blocks = bt.size // m
-        used = n_blocks * m
-        self._block_t, self._block_v = bt[used:], bv[used:]
+        dec_t, dec_v = self._resampler.push(t=t, values=v)
+        n_blocks = dec_t.size
         if n_blocks == 0:
             return np.zeros(0), np.zeros((0, len(self.columns)))
-        dec_t = bt[m - 1:used:m]
-        dec_v = bv[:used].reshape(n_blocks, m, 6).mean(axis=1) if m > 1 else bv[:used]
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)
@@ -698,8 +691,9 @@ def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.nd
         return np.zeros((0, k))
     padded = np.concatenate([np.full((window - 1 - before.shape[0], k), -np.inf),
                              before, values])
-    windows = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
-    return windows.max(axis=-1)[-m:]
+    # rows i .. i + window - 1 of padded end at new row i: one gather, one reduction
+    index = np.arange(padded.shape[0] - m, padded.shape[0])[:, None] - np.arange(window)
+    return _max_reduce(padded[index], axis=1)
 
 
 def _with_angle(names: tuple, change: np.ndarray) -> dict:
@@ -730,7 +724,8 @@ def window_mean(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndar
         Same unit as ``signal``.
 
     """
-    return signal[ends[:, None] + np.arange(1 - window, 1)].mean(axis=1)
+    # np.mean's own arithmetic (the sum along the axis, then one division) without its wrapper
+    return np.add.reduce(signal[ends[:, None] + np.arange(1 - window, 1)], axis=1) / window
 
 
 def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:

@@ -1,12 +1,16 @@
 """
-Shared rosbag2 helpers: finding bags, reading messages, ground truth and manifests.
+Shared bag helpers: finding bags, reading messages, ground truth and manifests.
 
-Messages are deserialised with rosbags' ROS 2 Jazzy typestore, extended with every message
-definition embedded in the bag (rosbag2 since Iron stores them; rosbags' AnyReader reads them),
-so non-standard types such as ``audio_common_msgs/msg/AudioData`` decode without their package.
-Deserialised messages have the same field names as rclpy messages (``header.stamp.sec``,
+One reader for every recording a user has: rosbag2 directories (sqlite3 or mcap) and ROS 1
+``.bag`` files, through rosbags (no ROS install needed). rosbag2 messages are deserialised
+with rosbags' ROS 2 Jazzy typestore, extended with every message definition embedded in the
+bag (rosbag2 since Iron stores them; rosbags' AnyReader reads them), so non-standard types
+such as ``audio_common_msgs/msg/AudioData`` decode without their package. Deserialised
+messages have the same field names as rclpy messages (``header.stamp.sec``,
 ``wrench.force.x``, array fields as numpy arrays), so one set of message -> array adapters
-serves recorded bags and the live node.
+serves recorded bags and the live node. ROS 1 messages are deserialised with the definitions
+every ROS 1 bag stores; their field names are the same (ROS 1's ``Header.seq`` is never read),
+see :mod:`contact_detector.io.ros1`.
 """
 
 from contextlib import contextmanager, ExitStack
@@ -16,10 +20,12 @@ from typing import Any, Callable, Iterator, Mapping, NamedTuple, Sequence
 
 import numpy as np
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 
 from contact_detector.errors import BagError
+from contact_detector.io import ros1
 
 #: Topic and type names written by the simulator and read by the tools.
 WRENCH_TOPIC = '/wrist_wrench'
@@ -55,6 +61,16 @@ def is_bag_dir(path: Path) -> bool:
     return path.is_dir() and (path / 'metadata.yaml').is_file()
 
 
+def is_ros1_bag(path: Path) -> bool:
+    """Return True if ``path`` is a ROS 1 bag file (``*.bag``)."""
+    return path.is_file() and path.suffix == '.bag'
+
+
+def is_bag(path: Path) -> bool:
+    """Return True if ``path`` is a rosbag2 directory or a ROS 1 ``.bag`` file."""
+    return is_bag_dir(path) or is_ros1_bag(path)
+
+
 def find_bags(paths: Sequence[str | Path]) -> list[Path]:
     """
     Resolve bag paths.
@@ -62,15 +78,15 @@ def find_bags(paths: Sequence[str | Path]) -> list[Path]:
     Parameters
     ----------
     paths : sequence of str or Path
-        Each is a bag directory (has ``metadata.yaml``), a directory whose direct
-        subdirectories are bags, or a bag's storage file (``.db3`` / ``.mcap``, meaning its
-        directory).
+        Each is a rosbag2 directory (has ``metadata.yaml``), a ROS 1 ``.bag`` file, a
+        directory whose direct entries are bags of either kind, or a rosbag2 storage file
+        (``.db3`` / ``.mcap``, meaning its directory).
 
     Returns
     -------
     list of Path
-        Bag directories; a directory of bags contributes its bags sorted by name. Argument
-        order is kept; duplicates are dropped.
+        Bag directories and ``.bag`` files; a directory of bags contributes its bags sorted by
+        name. Argument order is kept; duplicates are dropped.
 
     Raises
     ------
@@ -85,15 +101,16 @@ def find_bags(paths: Sequence[str | Path]) -> list[Path]:
             raise BagError(f'no such bag or directory: {path}')
         if path.is_file() and path.suffix in ('.db3', '.mcap') and is_bag_dir(path.parent):
             found = [path.parent]
-        elif is_bag_dir(path):
+        elif is_bag(path):
             found = [path]
         elif path.is_dir():
-            found = sorted(p for p in path.iterdir() if is_bag_dir(p))
+            found = sorted(p for p in path.iterdir() if is_bag(p))
             if not found:
-                raise BagError(f'{path} is neither a rosbag2 directory (no metadata.yaml) '
-                               'nor a directory of rosbag2 directories')
+                raise BagError(f'{path} is neither a bag (a rosbag2 directory with '
+                               'metadata.yaml, or a ROS 1 .bag file) nor a directory of bags')
         else:
-            raise BagError(f'{path} is not a rosbag2 directory')
+            raise BagError(f'{path} is not a bag (a rosbag2 directory with metadata.yaml, or '
+                           'a ROS 1 .bag file)')
         for bag in found:
             if bag not in out:
                 out.append(bag)
@@ -114,10 +131,11 @@ def _complete_typestore(reader: AnyReader) -> None:
 @contextmanager
 def open_reader(path: str | Path) -> Iterator[AnyReader]:
     """
-    Open a rosbag2 directory with rosbags' :class:`AnyReader`.
+    Open a rosbag2 directory or a ROS 1 bag with rosbags' :class:`AnyReader`.
 
-    Use as ``with open_reader(path) as reader: ...``. The reader's typestore holds the bag's
-    embedded definitions plus the Jazzy standard types.
+    Use as ``with open_reader(path) as reader: ...``. For rosbag2 the reader's typestore holds
+    the bag's embedded definitions plus the Jazzy standard types; for ROS 1 the definitions
+    the bag stores (every ROS 1 bag stores all of them).
 
     Raises
     ------
@@ -126,15 +144,15 @@ def open_reader(path: str | Path) -> Iterator[AnyReader]:
 
     """
     path = Path(path)
-    if not is_bag_dir(path):
-        raise BagError(f'{path} is not a rosbag2 directory (no metadata.yaml)')
+    _check_bag(path)
     try:
         reader = AnyReader([path], default_typestore=jazzy_typestore())
         reader.open()
     except Exception as err:  # rosbags raises several unrelated types for bad bags
         raise BagError(f'cannot open bag {path}: {err}') from err
     try:
-        _complete_typestore(reader)
+        if reader.is2:
+            _complete_typestore(reader)
         yield reader
     finally:
         reader.close()
@@ -149,13 +167,14 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
     Parameters
     ----------
     path : Path
-        rosbag2 directory.
+        rosbag2 directory or ROS 1 ``.bag`` file.
     topics : sequence of str or None
         Only these topics (all if None). Topics missing from the bag are ignored.
     decoders : mapping or None
-        Faster readers by message type (``pkg/msg/Type`` -> function of the CDR bytes, see
-        :mod:`contact_detector.io.cdr`); a reader that returns None hands the message to
-        rosbags.
+        Faster readers of rosbag2 messages by type (``pkg/msg/Type`` -> function of the CDR
+        bytes, see :mod:`contact_detector.io.cdr`); a reader that returns None hands the
+        message to rosbags. ROS 1 bags use :data:`contact_detector.io.ros1.FAST_DECODERS`
+        when ``decoders`` is given.
 
     Yields
     ------
@@ -168,15 +187,15 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
         neither embedded in the bag nor a Jazzy standard type).
 
     """
-    decoders = decoders or {}
     path = Path(path)
-    if not is_bag_dir(path):
-        raise BagError(f'{path} is not a rosbag2 directory (no metadata.yaml)')
+    _check_bag(path)
+    is1 = is_ros1_bag(path)
+    decoders = (ros1.FAST_DECODERS if is1 else decoders) if decoders else {}
     with ExitStack() as stack:
         try:
             # The plain reader: AnyReader's typestore set-up costs ~30 ms per bag, and the
             # fast decoders do not need it. It is opened only if a message needs rosbags.
-            reader = stack.enter_context(Reader(path))
+            reader = stack.enter_context(Ros1Reader(path) if is1 else Reader(path))
         except Exception as err:  # rosbags raises several unrelated types for bad bags
             raise BagError(f'cannot open bag {path}: {err}') from err
         conns = [c for c in reader.connections if topics is None or c.topic in topics]
@@ -202,10 +221,86 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
             raise BagError(f'{path}: error while reading messages: {err}') from err
 
 
-def topic_types(path: Path) -> dict[str, str]:
-    """Topic name -> message type of a bag."""
+def iter_cdr(path: Path, *, topics: Sequence[str] | None = None
+             ) -> Iterator[tuple[str, str, int, bytes]]:
+    """
+    Yield ``(topic, msgtype, log time ns, ROS 2 CDR bytes)`` of every message, in log order.
+
+    rosbag2 messages are yielded as recorded. ROS 1 messages are deserialised with the bag's
+    definitions and serialised again as ROS 2 CDR with the Jazzy definitions (types Jazzy
+    lacks, e.g. ``audio_common_msgs``, keep the bag's definitions; ``Header.seq`` is dropped),
+    so ``replay`` can publish an old recording into a ROS 2 graph.
+
+    Raises
+    ------
+    BagError
+        The bag cannot be read, or a ROS 1 message does not map onto its ROS 2 type.
+
+    """
+    path = Path(path)
     with open_reader(path) as reader:
-        return {c.topic: c.msgtype for c in reader.connections}
+        conns = [c for c in reader.connections if topics is None or c.topic in topics]
+        if not conns:
+            return
+        store = None
+        if not reader.is2:
+            store = get_typestore(Stores.ROS2_JAZZY)
+            have = set(store.fielddefs)
+            store.register({name: defs for name, defs in reader.typestore.fielddefs.items()
+                            if name not in have})
+        try:
+            for conn, log_ns, raw in reader.messages(connections=conns):
+                if store is None:
+                    yield conn.topic, conn.msgtype, int(log_ns), bytes(raw)
+                    continue
+                try:
+                    msg = ros1.to_ros2(reader.deserialize(raw, conn.msgtype),
+                                       msgtype=conn.msgtype, typestore=store)
+                    cdr = bytes(store.serialize_cdr(msg, conn.msgtype))
+                except Exception as err:
+                    raise BagError(f'{path}: cannot convert {conn.topic} ({conn.msgtype}) '
+                                   f'to ROS 2: {err}') from err
+                yield conn.topic, conn.msgtype, int(log_ns), cdr
+        except BagError:
+            raise
+        except Exception as err:
+            raise BagError(f'{path}: error while reading messages: {err}') from err
+
+
+def _check_bag(path: Path) -> None:
+    if not is_bag(path):
+        raise BagError(f'{path} is not a bag (a rosbag2 directory with metadata.yaml, or a '
+                       'ROS 1 .bag file)')
+
+
+def topic_types(path: Path) -> dict[str, str]:
+    """
+    Topic name -> message type of a bag (from its index: no message is read).
+
+    Raises
+    ------
+    BagError
+        Not a bag, or it cannot be opened.
+
+    """
+    path = Path(path)
+    _check_bag(path)
+    if is_bag_dir(path):
+        # metadata.yaml with libyaml: rosbags' reader parses it with ruamel (~50 ms a bag)
+        try:
+            import yaml
+            loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+            info = yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
+                             Loader=loader)['rosbag2_bagfile_information']
+            return {t['topic_metadata']['name']: t['topic_metadata']['type']
+                    for t in info['topics_with_message_count']}
+        except Exception:  # anything unusual: let rosbags read it (and report the problem)
+            pass
+    try:
+        with (Ros1Reader(path) if is_ros1_bag(path) else Reader(path)) as reader:
+            return {c.topic: c.msgtype for c in reader.connections}
+    except Exception as err:  # rosbags raises several unrelated types for bad bags
+        raise BagError(f'cannot open bag {path}: {err}') from err
 
 
 def read_truth(path: Path, *, topic: str = TRUTH_TOPIC) -> list[tuple[float, bool]]:
@@ -309,7 +404,8 @@ def manifest_entry(bag: str | Path) -> dict | None:
     file = bag.parent / MANIFEST_NAME
     if not file.is_file():
         return None
+    names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
     for trial in read_manifest(file)['trials']:
-        if trial.get('bag') == bag.name or trial.get('name') == bag.name:
+        if trial.get('bag') in names or trial.get('name') in names:
             return trial
     return None

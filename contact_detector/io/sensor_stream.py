@@ -7,6 +7,7 @@ and with the bag's log (receive) time otherwise, wrench samples with their heade
 the features computed offline are those the node computes live: no train/serve skew.
 """
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, List, Optional, Union
@@ -15,7 +16,7 @@ import numpy as np
 
 from contact_detector.errors import BagError, InputError
 from contact_detector.io import cdr
-from contact_detector.io.bags import iter_messages
+from contact_detector.io.bags import AudioSeries, iter_messages
 from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
 
 DEFAULT_AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
@@ -37,6 +38,11 @@ class StreamSpec:
         Interleaved channels in each audio message.
     channel : int or None
         Channel to keep; None mixes all channels.
+    coding : str
+        ``pcm`` (samples in the messages) or ``mp3`` (``AudioData`` bytes form an mp3
+        stream, decoded by :mod:`contact_detector.io.mp3`).
+    audio_rate : float or None
+        Sample rate, Hz (needed for mp3: the decoded samples are timed with it).
 
     """
 
@@ -46,6 +52,8 @@ class StreamSpec:
     audio_msg_type: Optional[str] = None
     channels: int = 1
     channel: Optional[int] = None
+    coding: str = 'pcm'
+    audio_rate: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -98,7 +106,7 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
     Parameters
     ----------
     path : Path
-        A rosbag2 directory (sqlite3 or mcap).
+        A rosbag2 directory (sqlite3 or mcap) or a ROS 1 ``.bag`` file.
     spec : StreamSpec
         Topics and audio format.
 
@@ -113,7 +121,10 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
         form) and the audio topic holds another type.
 
     """
-    topics = [spec.wrench_topic, spec.audio_topic, spec.truth_topic]
+    if spec.coding == 'mp3':
+        yield from _mp3_events(Path(path), spec=spec)
+        return
+    topics = [t for t in (spec.wrench_topic, spec.audio_topic, spec.truth_topic) if t]
     for message in iter_messages(Path(path), topics=topics, decoders=FAST_DECODERS):
         now = message.log_time_ns * 1e-9
         if message.topic == spec.audio_topic and spec.audio_msg_type \
@@ -138,9 +149,77 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
             yield BadEvent(kind=kind, reason=str(err), now=now)
 
 
+def _mp3_events(path: Path, *, spec: StreamSpec) -> Iterator[Event]:
+    """:func:`sensor_events` for an mp3 AudioData stream: decoded at once, then interleaved."""
+    from contact_detector.io.mp3 import decode_mp3
+
+    chunks, log_t = [], []
+    for message in iter_messages(path, topics=[spec.audio_topic]):
+        audio = getattr(message.msg, 'audio', message.msg)       # AudioDataStamped: .audio
+        chunks.append(bytes(np.asarray(audio.data, dtype=np.uint8)))
+        log_t.append(message.log_time_ns * 1e-9)
+    if not chunks:
+        raise BagError(f'{path}: no messages on {spec.audio_topic}')
+    try:
+        mp3 = decode_mp3(chunks=chunks, log_t=log_t, channel=spec.channel)
+    except InputError as err:
+        raise BagError(f'{path}: {spec.audio_topic}: {err}') from err
+    if spec.audio_rate and abs(mp3.rate - spec.audio_rate) > 0.5:
+        raise BagError(f'{path}: the mp3 stream on {spec.audio_topic} is at {mp3.rate:g} Hz, '
+                       f'not {spec.audio_rate:g} Hz as AudioInfo / --audio-rate say')
+    audio_events, lo = [], 0
+    for k, end in enumerate(mp3.ends.tolist()):
+        if end > lo:
+            audio_events.append(AudioEvent(samples=mp3.samples[lo:end],
+                                           stamp=mp3.t0 + (end - 1) / mp3.rate, now=log_t[k]))
+            lo = end
+    others = sensor_events(path, spec=dataclasses.replace(spec, coding='pcm',
+                                                          audio_topic='\0 no audio'))
+    # both in log-time order: merge them (audio first on ties, as it was logged first)
+    pending = iter(audio_events)
+    nxt = next(pending, None)
+    for event in others:
+        while nxt is not None and nxt.now <= event.now:
+            yield nxt
+            nxt = next(pending, None)
+        yield event
+    while nxt is not None:
+        yield nxt
+        nxt = next(pending, None)
+
+
 def load_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> List[Event]:
     """Return :func:`sensor_events` as a list (decode a bag once, replay it many times)."""
     return list(sensor_events(path, spec=spec))
+
+
+def read_audio_series(path: Path, *, spec: StreamSpec) -> AudioSeries:
+    """
+    Read a bag's audio into one array, through the node's adapters (any supported type).
+
+    Returns
+    -------
+    AudioSeries
+        ``samples`` in full-scale units (float64 in [-1, 1]), chunk ends, and per chunk the
+        time of its last sample (its header stamp, else its log time).
+
+    Raises
+    ------
+    BagError
+        No readable audio.
+
+    """
+    chunks, stamps = [], []
+    for event in sensor_events(path, spec=spec):
+        if isinstance(event, AudioEvent):
+            samples = event.samples
+            scale = 32768.0 if samples.dtype == np.int16 else 1.0
+            chunks.append(samples.astype(np.float64) / scale)
+            stamps.append(event.stamp)
+    if not chunks:
+        raise BagError(f'{path}: no readable audio on {spec.audio_topic}')
+    ends = np.cumsum([c.size for c in chunks]).astype(np.int64)
+    return AudioSeries(np.concatenate(chunks), ends, np.asarray(stamps))
 
 
 def truth_onsets(events: List[Event]) -> List[tuple]:

@@ -223,7 +223,7 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
 
 def worst_family(summaries: Sequence[dict]) -> Optional[dict]:
     """
-    The worst of per-family summaries: most premature, then fewest detected, then slowest.
+    Return the worst of per-family summaries: most premature, fewest caught, slowest.
 
     Parameters
     ----------

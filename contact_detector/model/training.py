@@ -11,6 +11,7 @@ report that split and a split by *trial*, and quote the trial split.
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence
+import warnings
 
 import numpy as np
 
@@ -99,7 +100,11 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
 
 def read_labels_csv(path: Path) -> Dict[str, List[float]]:
     """
-    Read ``bag,onset_start,onset_end`` rows (a header row is allowed) into bag -> onsets.
+    Read ``bag,onset_start,onset_end[,confidence[,reason]]`` rows into bag -> onsets.
+
+    A header row is allowed. A row with an empty ``onset_start`` (``contact-detector label``
+    could not label that bag; its last cell says why) is skipped with a ``UserWarning``; see
+    :func:`unlabelled_bags` for those bags.
 
     Raises
     ------
@@ -108,16 +113,32 @@ def read_labels_csv(path: Path) -> Dict[str, List[float]]:
 
     """
     out: Dict[str, List[float]] = {}
-    for number, line in enumerate(Path(path).read_text().splitlines(), start=1):
-        cells = [c.strip() for c in line.split(',')]
-        header = number == 1 and not _is_float(cells[1] if len(cells) > 1 else '')
-        if not line.strip() or header:
+    for number, cells, line in _label_rows(path):
+        if len(cells) > 1 and cells[1] == '':
+            reason = cells[-1] if len(cells) > 3 else ''
+            warnings.warn(f'{path}:{number}: {cells[0]} has no onset ({reason or "no reason"})'
+                          '; skipped', UserWarning, stacklevel=2)
             continue
         if len(cells) < 2 or not _is_float(cells[1]):
             raise BagError(f'{path}:{number}: expected "bag,onset_start,onset_end", '
                            f'got {line!r}')
         out.setdefault(Path(cells[0]).name, []).append(float(cells[1]))
     return out
+
+
+def unlabelled_bags(path: Path) -> Dict[str, str]:
+    """Bags of a labels CSV whose row has no onset -> the reason given (may be '')."""
+    return {Path(c[0]).name: (c[-1] if len(c) > 3 else '')
+            for _n, c, _line in _label_rows(path) if len(c) > 1 and c[1] == ''}
+
+
+def _label_rows(path: Path):
+    for number, line in enumerate(Path(path).read_text().splitlines(), start=1):
+        cells = [c.strip() for c in line.split(',')]
+        header = number == 1 and len(cells) > 1 and not _is_float(cells[1]) and cells[1] != ''
+        if not line.strip() or header:
+            continue
+        yield number, cells, line
 
 
 def _is_float(text: str) -> bool:

@@ -21,7 +21,8 @@ Interface (all names relative, remappable)::
     services    ~/arm                std_srvs/srv/SetBool
                 ~/reset              std_srvs/srv/Trigger
 
-See ``docs/node.md``.
+The wiring (:class:`DetectorWiring`) is shared with the managed (lifecycle) variant,
+:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``.
 """
 
 from collections import deque
@@ -31,7 +32,7 @@ import importlib
 import re
 import sys
 import time
-from typing import Any, Dict, Optional
+from typing import Any, Callable, Dict, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
@@ -52,6 +53,7 @@ from trajectory_msgs.msg import JointTrajectory
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.features.resample import rate_mismatch, StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
@@ -69,7 +71,7 @@ from contact_detector.ros.params import (config_from_values, current_values,
 CLOCK_JUMP_RESET_S = 0.1
 #: History depth of the output publishers (100 frames = 1 s).
 OUTPUT_DEPTH = 100
-#: Processing latencies kept for :meth:`ContactDetectorNode.latency_samples`.
+#: Processing latencies kept for :meth:`DetectorWiring.latency_samples`.
 LATENCY_HISTORY = 100_000
 
 NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
@@ -152,41 +154,38 @@ class _Stream:
         self.window_samples = 0
 
 
-class ContactDetectorNode(Node):
+class DetectorWiring:
     """
-    ROS 2 node around :class:`ContactDetector`.
+    The node's ROS wiring around :class:`ContactDetector`, shared by both node classes.
 
-    Parameters
-    ----------
-    node_name : str
-        Node name (default ``contact_detector``).
-    bundle : ModelBundle, optional
-        A loaded model; default: load ``model.path`` (or the shipped model).
-    **kwargs
-        Passed to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``, ...).
+    A mixin for an rclpy :class:`~rclpy.node.Node` (:class:`ContactDetectorNode`) or
+    :class:`~rclpy.lifecycle.LifecycleNode`
+    (:class:`~contact_detector.ros.lifecycle_node.ContactDetectorLifecycleNode`). Its set-up
+    comes in steps that the plain node runs at once and the managed node runs in its
+    transitions:
 
-    Raises
-    ------
-    ConfigError
-        A parameter is invalid, or the audio message package is missing.
-    ModelError
-        The model cannot be loaded.
-
+    ``_load``
+        config, model, detector, counters (no ROS entity; configure).
+    ``_create_outputs`` / ``_destroy_outputs``
+        publishers and the ``~/arm`` and ``~/reset`` services (configure / cleanup).
+    ``_create_inputs`` / ``_destroy_inputs``
+        subscriptions, the diagnostics timer and the clock-jump callback (activate /
+        deactivate): without them nothing is decided, so nothing is released.
     """
 
-    def __init__(self, node_name: str = 'contact_detector', *,
-                 bundle: Optional[ModelBundle] = None, **kwargs: Any) -> None:
-        super().__init__(node_name, **kwargs)
-        try:
-            self._setup(bundle)
-        except BaseException:
-            self.destroy_node()
-            raise
+    def _load(self, config: NodeConfig, bundle: Optional[ModelBundle]) -> None:
+        """
+        Take a validated config, load the model (unless given) and build the detector.
 
-    # --- set-up ----------------------------------------------------------------------------------
+        Raises
+        ------
+        ConfigError
+            The audio message package is missing, or the model cannot run with the config.
+        ModelError
+            The model cannot be loaded.
 
-    def _setup(self, bundle: Optional[ModelBundle]) -> None:
-        self.config: NodeConfig = declare_parameters(self)
+        """
+        self.config: NodeConfig = config
         # rcl's clock itself: Clock.now() wraps it in a Time object (~2 us more per read).
         self._clock_handle = self.get_clock().handle
         cfg = self.config
@@ -208,12 +207,15 @@ class ContactDetectorNode(Node):
         # audio.timeout_s: the F/T-only model stands in while the audio is silent.
         self.ft_bundle = (load_bundle(path=default_ft_model_path())
                           if self.use_audio and cfg.audio_timeout_s > 0 else None)
+        self._audio_class, self._info_class = audio_class, info_class
         self.counts = {name: 0 for name in NODE_COUNTERS}
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
         self._pending: Optional[NodeConfig] = None
         self.audio = _Stream()
         self.wrench = _Stream()
+        self.wrench_rate = StampRate()      # the rate the wrench really arrives at
+        self._rate_warned = False
         self.audio_format = AudioFormat(sample_rate=cfg.audio_sample_rate,
                                         channels=cfg.audio_channels)
         # ros-drivers types: the format is confirmed by audio_info (None = not yet).
@@ -229,18 +231,36 @@ class ContactDetectorNode(Node):
         self._window_age: list = []
         self._window_start = time.monotonic()
         self._window_counts: Dict[str, int] = {}
+        self._started: set = set()
+        self.diagnostics_timer = None
 
+    def _create_outputs(self, make_publisher: Callable[..., Any]) -> None:
+        """Create the publishers (with ``make_publisher``) and the services."""
+        cfg = self.config
         # One second of frames: a reliable subscriber that stalls briefly loses nothing.
         output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                                 reliability=ReliabilityPolicy.RELIABLE)
-        self.contact_pub = self.create_publisher(Bool, 'contact', output_qos)
-        self.probability_pub = self.create_publisher(Float32, 'contact_probability', output_qos)
-        self.release_pub = self.create_publisher(Bool, 'release', output_qos)
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.gripper_pub = (self.create_publisher(JointTrajectory, cfg.gripper_topic,
-                                                  output_qos)
+        self.contact_pub = make_publisher(Bool, 'contact', output_qos)
+        self.probability_pub = make_publisher(Float32, 'contact_probability', output_qos)
+        self.release_pub = make_publisher(Bool, 'release', output_qos)
+        self.diagnostics_pub = make_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.gripper_pub = (make_publisher(JointTrajectory, cfg.gripper_topic, output_qos)
                             if cfg.gripper_enabled else None)
+        self.arm_srv = self.create_service(SetBool, '~/arm', self._on_arm)
+        self.reset_srv = self.create_service(Trigger, '~/reset', self._on_reset)
 
+    def _destroy_outputs(self, destroy_publisher: Callable[[Any], Any]) -> None:
+        """Destroy what :meth:`_create_outputs` made."""
+        for pub in (self.contact_pub, self.probability_pub, self.release_pub,
+                    self.diagnostics_pub, self.gripper_pub):
+            if pub is not None:
+                destroy_publisher(pub)
+        self.destroy_service(self.arm_srv)
+        self.destroy_service(self.reset_srv)
+
+    def _create_inputs(self) -> None:
+        """Subscribe to the inputs; start the diagnostics timer and the clock-jump callback."""
+        cfg = self.config
         input_qos = QoSProfile(
             history=HistoryPolicy.KEEP_LAST, depth=cfg.qos_depth,
             reliability=(ReliabilityPolicy.RELIABLE if cfg.qos_reliability == 'reliable'
@@ -248,33 +268,43 @@ class ContactDetectorNode(Node):
             durability=qos_profile_sensor_data.durability)
         # Serialised bytes, read by io.cdr (rclpy's deserialisation for anything it refuses):
         # no message object per input message.
-        self._audio_class = audio_class
         self._read_audio = FAST_DECODERS.get(cfg.audio_msg_type)
         self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
                                                    self._on_wrench, input_qos, raw=True)
-        self.audio_sub = (self.create_subscription(audio_class, 'audio', self._on_audio,
+        self.audio_sub = (self.create_subscription(self._audio_class, 'audio', self._on_audio,
                                                    input_qos, raw=self._read_audio is not None)
                           if self.use_audio else None)
         self.info_sub = None
-        if info_class is not None and self.use_audio:
+        if self._info_class is not None and self.use_audio:
             info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                                   reliability=ReliabilityPolicy.RELIABLE,
                                   durability=DurabilityPolicy.TRANSIENT_LOCAL)
-            self.info_sub = self.create_subscription(info_class, 'audio_info',
+            self.info_sub = self.create_subscription(self._info_class, 'audio_info',
                                                      self._on_audio_info, info_qos)
-        self.arm_srv = self.create_service(SetBool, '~/arm', self._on_arm)
-        self.reset_srv = self.create_service(Trigger, '~/reset', self._on_reset)
         self.diagnostics_timer = self.create_timer(cfg.diagnostics_period_s,
                                                    self._publish_diagnostics)
         self._jump_handle = self.get_clock().create_jump_callback(
             JumpThreshold(min_forward=None, min_backward=Duration(
                 nanoseconds=-int(CLOCK_JUMP_RESET_S * 1e9))),
             post_callback=self._on_clock_jump)
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
-        rule = self.detector.rule
+        # Said once; /diagnostics says it every period until an input arrives.
+        inputs = [sub.topic_name for sub in (self.wrench_sub, self.audio_sub) if sub is not None]
+        self.get_logger().info(f'waiting for input on {" and ".join(inputs)}')
+
+    def _destroy_inputs(self) -> None:
+        """Destroy what :meth:`_create_inputs` made."""
+        self._jump_handle.unregister()
+        self.destroy_timer(self.diagnostics_timer)
+        self.diagnostics_timer = None
+        for sub in (self.wrench_sub, self.audio_sub, self.info_sub):
+            if sub is not None:
+                self.destroy_subscription(sub)
+        self.wrench_sub = self.audio_sub = self.info_sub = None
+
+    def _log_loaded(self) -> None:
+        cfg, rule = self.config, self.detector.rule
         self.get_logger().info(
-            f'model {bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
+            f'model {self.bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
             f'audio {self._audio_text()}; wrench {cfg.wrench_rate:g} Hz; '
             f'release {"armed" if self.detector.armed else "disarmed"}')
 
@@ -459,6 +489,7 @@ class ContactDetectorNode(Node):
             return
         stream.last_stamp = t
         stream.window_samples += 1
+        self.wrench_rate.add(t)
         self._handle(self.detector.on_wrench_one(t=t, values=values, now=now), now, entry,
                      'wrench')
 
@@ -577,7 +608,8 @@ class ContactDetectorNode(Node):
         values.update(mine)
         try:
             candidate = config_from_values(values)
-            candidate.rule(self.bundle.decision_rule)
+            if self.bundle is not None:         # None: a managed node not configured yet
+                candidate.rule(self.bundle.decision_rule)
         except ConfigError as err:
             self.get_logger().warning(f'parameter update refused: {err}')
             return SetParametersResult(successful=False, reason=str(err))
@@ -586,7 +618,8 @@ class ContactDetectorNode(Node):
 
     def _apply_parameters(self, params: list) -> None:
         new, self._pending = self._pending, None
-        if new is None or not any(p.name in PARAMS_BY_NAME for p in params):
+        if new is None or not any(p.name in PARAMS_BY_NAME for p in params) \
+                or self.bundle is None:         # configure reads the parameters
             return
         old, self.config = self.config, new
         pairs = ([(self.detector.primary, self.bundle), (self.detector.fallback, self.ft_bundle)]
@@ -597,7 +630,8 @@ class ContactDetectorNode(Node):
                                    corrupt_holdoff_s=new.corrupt_holdoff_s,
                                    rule=new.rule(bundle.decision_rule))
             det.set_rule(det.settings.rule)
-        if new.diagnostics_period_s != old.diagnostics_period_s:
+        if new.diagnostics_period_s != old.diagnostics_period_s \
+                and self.diagnostics_timer is not None:
             self.destroy_timer(self.diagnostics_timer)
             self.diagnostics_timer = self.create_timer(new.diagnostics_period_s,
                                                        self._publish_diagnostics)
@@ -668,12 +702,29 @@ class ContactDetectorNode(Node):
             ('wrench', wrench_age),)
         stale = [name for name, value in inputs
                  if value is None or value > cfg.max_input_delay_s]
+        # Until the first input arrives the node is waiting, not faulty: no warning.
+        waiting = all(value is None for _, value in inputs)
+        for name, stream in (('audio', self.audio), ('wrench', self.wrench)):
+            if stream.received and name not in self._started:
+                self._started.add(name)
+                self.get_logger().info(f'{name} input started')
         troubles = {name: counts.get(name, 0) - self._window_counts.get(name, 0)
                     for name in WARN_COUNTERS}
         troubles = {name: value for name, value in troubles.items() if value > 0}
         self._window_counts = counts
+        measured = self.wrench_rate.rate()
+        values['wrench_measured_rate_hz'] = 'n/a' if measured is None else f'{measured:.1f}'
+        mismatch = rate_mismatch(measured=measured, configured=cfg.wrench_rate)
+        if mismatch and not self._rate_warned:
+            self.get_logger().warning(mismatch)      # once; /diagnostics says it every period
+        self._rate_warned = mismatch is not None
         if self.audio_refused:
             level, message = DiagnosticStatus.ERROR, f'audio refused: {self.audio_refused}'
+        elif waiting:
+            level, message = DiagnosticStatus.WARN, (
+                'waiting for input: ' + ', '.join(name for name, _ in inputs))
+        elif mismatch:
+            level, message = DiagnosticStatus.WARN, mismatch
         elif stale:
             level, message = DiagnosticStatus.WARN, f'stale or missing input: {", ".join(stale)}'
         elif troubles:
@@ -685,7 +736,7 @@ class ContactDetectorNode(Node):
         if isinstance(det, AudioFallback) and det.active is det.fallback:
             message += '; F/T-only model active (no audio for audio.timeout_s)'
             level = max(level, DiagnosticStatus.WARN)
-        if level != DiagnosticStatus.OK:
+        if level != DiagnosticStatus.OK and not waiting and message != mismatch:
             # Faults without a log line of their own (dropouts, stale input, clipping) show
             # up here, throttled like the others.
             self._warn(f'diagnostics-{message.split(":")[0]}', f'diagnostics: {message}')
@@ -699,6 +750,43 @@ class ContactDetectorNode(Node):
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         return array
+
+
+class ContactDetectorNode(DetectorWiring, Node):
+    """
+    ROS 2 node around :class:`ContactDetector`, running from construction.
+
+    Parameters
+    ----------
+    node_name : str
+        Node name (default ``contact_detector``).
+    bundle : ModelBundle, optional
+        A loaded model; default: load ``model.path`` (or the shipped model).
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``, ...).
+
+    Raises
+    ------
+    ConfigError
+        A parameter is invalid, or the audio message package is missing.
+    ModelError
+        The model cannot be loaded.
+
+    """
+
+    def __init__(self, node_name: str = 'contact_detector', *,
+                 bundle: Optional[ModelBundle] = None, **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        try:
+            self._load(declare_parameters(self), bundle)
+            self._log_loaded()
+            self._create_outputs(self.create_publisher)
+            self._create_inputs()
+            self.add_on_set_parameters_callback(self._validate_parameters)
+            self.add_post_set_parameters_callback(self._apply_parameters)
+        except BaseException:
+            self.destroy_node()
+            raise
 
 
 def make_executor(node: ContactDetectorNode) -> Executor:

@@ -14,7 +14,7 @@ import math
 from typing import Any, Dict, Mapping, Optional, Sequence
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-from rclpy.exceptions import InvalidParameterTypeException, ParameterException
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
 from contact_detector.detection.release import rule_overrides
@@ -59,8 +59,16 @@ class ParamSpec:
     choices: tuple = ()
 
     def descriptor(self) -> ParameterDescriptor:
-        """Return the rclpy descriptor: description, range, read-only flag."""
-        desc = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        """
+        Return the rclpy descriptor: description, range, read-only flag.
+
+        Floating-point parameters are dynamically typed, so that an integer (``-p
+        audio.sample_rate:=16000``, ``sample_rate: 16000`` in a params file) is accepted;
+        :func:`config_from_values` converts it to a float and refuses any other type, and
+        checks the range for both (rclpy checks ``floating_point_range`` for floats only).
+        """
+        desc = ParameterDescriptor(description=self.description, read_only=self.read_only,
+                                   dynamic_typing=isinstance(self.default, float))
         if self.choices:
             desc.additional_constraints = 'one of: ' + ', '.join(self.choices)
         if self.low is not None and isinstance(self.default, float):
@@ -100,8 +108,10 @@ PARAMS: Sequence[ParamSpec] = (
               'are dropped as corrupt.', 0.001, 60.0),
     ParamSpec('audio.wait_for_info', True, 'ros-drivers audio_common types: drop audio until '
               'audio_info has confirmed raw S16LE; false = trust the audio.* parameters.'),
-    ParamSpec('wrench.rate', 100.0, 'Wrench rate in Hz, an integer multiple of the F/T '
-              'feature rate of the model.', 1.0, 100000.0),
+    ParamSpec('wrench.rate', 100.0, 'Wrench rate in Hz, 50 to 10000: resampled onto the F/T '
+              'feature rate of the model (block means for integer multiples). The node '
+              'measures the real rate and warns when it differs by more than 10 %.',
+              1.0, 100000.0),
     ParamSpec('wrench.stamp_source', 'header', "Time of a wrench sample: 'header' = its stamp, "
               "'receive' = the node clock on arrival.", choices=STAMP_SOURCES),
     ParamSpec('qos.reliability', 'best_effort', 'Reliability of the input subscriptions '
@@ -228,6 +238,7 @@ def _check(name: str, value: Any) -> Any:
     if spec is None:
         raise ConfigError(f'unknown parameter {name!r}')
     want = type(spec.default)
+    # Floating-point parameters take integers too (dynamically typed, see ParamSpec).
     if want is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if type(value) is not want:
@@ -304,16 +315,25 @@ def declare_parameters(node: Node) -> NodeConfig:
         invalid; the message names the parameter.
 
     """
+    declare_all(node)
+    return config_from_values(current_values(node))
+
+
+def declare_all(node: Node) -> None:
+    """
+    Declare every parameter of :data:`PARAMS` on ``node`` (no cross-parameter check).
+
+    Raises
+    ------
+    ConfigError
+        An override has the wrong type or is out of range; the message names the parameter.
+
+    """
     for spec in PARAMS:
         try:
             node.declare_parameter(spec.name, spec.default, spec.descriptor())
-        except InvalidParameterTypeException as err:
-            hint = (' (write floating-point values with a decimal point, e.g. 16000.0)'
-                    if isinstance(spec.default, float) else '')
-            raise ConfigError(f'parameter {spec.name}: {err}{hint}') from err
         except ParameterException as err:
             raise ConfigError(f'parameter {spec.name}: {err}') from err
-    return config_from_values(current_values(node))
 
 
 def current_values(node: Node) -> Dict[str, Any]:

@@ -1,7 +1,8 @@
-"""Publish a rosbag2 into the live ROS graph with its original timing (no ``ros2 bag``).
+"""Publish a bag into the live ROS graph with its original timing (no ``ros2 bag``).
 
-Messages go out as their recorded CDR bytes, so any type rclpy can import plays back
-unchanged. Two options make a recording look live:
+rosbag2 messages go out as their recorded CDR bytes, so any type rclpy can import plays back
+unchanged; ROS 1 bags are converted to ROS 2 CDR first
+(:func:`contact_detector.io.bags.iter_cdr`). Two options make a recording look live:
 
 * ``clock``: publish ``/clock`` (rosgraph_msgs/Clock) with the bag time before every message
   and at least every 10 ms, for nodes running with ``use_sim_time`` — as
@@ -21,10 +22,8 @@ from typing import Callable, Dict, List, Optional, Sequence
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
-from rosbags.highlevel import AnyReader
-
 from contact_detector.errors import BagError
-from contact_detector.io.bags import jazzy_typestore
+from contact_detector.io.bags import iter_cdr
 
 CLOCK_PERIOD_S = 0.01
 
@@ -46,13 +45,12 @@ class Recorded:
 
 
 def read_recording(bag: Path, *, topics: Optional[Sequence[str]] = None) -> List[Recorded]:
-    """Read every message of a bag (raw CDR) in log-time order."""
+    """Read every message of a bag (rosbag2 or ROS 1) as ROS 2 CDR, in log-time order."""
     try:
-        with AnyReader([Path(bag)], default_typestore=jazzy_typestore()) as reader:
-            connections = [c for c in reader.connections
-                           if topics is None or c.topic in topics]
-            return [Recorded(topic=c.topic, msgtype=c.msgtype, log_ns=t, raw=bytes(raw))
-                    for c, t, raw in reader.messages(connections=connections)]
+        return [Recorded(topic=topic, msgtype=msgtype, log_ns=t, raw=raw)
+                for topic, msgtype, t, raw in iter_cdr(Path(bag), topics=topics)]
+    except BagError:
+        raise
     except Exception as err:  # rosbags raises several unrelated types for unreadable bags
         raise BagError(f'cannot read bag {bag}: {err}') from err
 

@@ -1,5 +1,5 @@
 """
-Write simulated trials as rosbag2 (sqlite3 or mcap) with rosbags, plus the JSON manifest.
+Write simulated trials as rosbag2 (sqlite3, mcap) or ROS 1 bags, plus the JSON manifest.
 
 Every bag holds three topics (message definitions embedded, so ``ros2 bag info`` and rosbags'
 AnyReader both open it):
@@ -16,10 +16,13 @@ AnyReader both open it):
 
 import json
 from pathlib import Path
+import struct
 from typing import Iterable, Mapping
 
 import numpy as np
+from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
 
 from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (AUDIO_TOPIC, AUDIO_TYPE, jazzy_typestore, MANIFEST_NAME,
@@ -27,7 +30,8 @@ from contact_detector.io.bags import (AUDIO_TOPIC, AUDIO_TYPE, jazzy_typestore, 
 from contact_detector.sim.trial import Trial
 
 FRAME_ID = 'wrist_ft_sensor_frame'
-STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
+#: rosbag2 storage plugins, and ``ros1`` for a ROS 1 ``.bag`` file.
+STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP, 'ros1': None}
 #: Manifest format version; bump when a field changes meaning.
 MANIFEST_VERSION = 1
 
@@ -92,26 +96,42 @@ def int16_multiarray_cdr(data: np.ndarray) -> bytes:
     return b'\x00\x01\x00\x00' + head + data.tobytes()
 
 
+def ros1_wrench(*, stamp_ns: int, values: np.ndarray, seq: int = 0,
+                frame_id: str = FRAME_ID) -> bytes:
+    """Serialise one ROS 1 WrenchStamped (``values``: force then torque, 6 floats)."""
+    sec, nsec = divmod(int(stamp_ns), 1_000_000_000)
+    fid = frame_id.encode('utf-8')
+    return struct.pack(f'<IIII{len(fid)}s6d', seq, sec, nsec, len(fid), fid, *values)
+
+
+def ros1_int16_multiarray(data: np.ndarray) -> bytes:
+    """Serialise one mono ROS 1 Int16MultiArray chunk (``layout.dim = [('samples', n, n)]``)."""
+    data = np.asarray(data, dtype='<i2')
+    n = len(data)
+    return (struct.pack('<II7sIIII', 1, 7, b'samples', n, n, 0, n) + data.tobytes())
+
+
 def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
                     audio: bool = True) -> Path:
     """
-    Write one trial as a rosbag2 directory.
+    Write one trial as a rosbag2 directory or a ROS 1 bag.
 
     Parameters
     ----------
     trial : Trial
         From :func:`contact_detector.sim.trial.simulate_trial`.
     path : Path
-        The bag directory to create; it must not exist.
+        The bag directory (ROS 1: file, ``.bag`` appended if missing) to create; it must not
+        exist.
     storage : str
-        'sqlite3' or 'mcap'.
+        'sqlite3', 'mcap' or 'ros1'.
     audio : bool
         False: no audio topic at all (a robot without a microphone).
 
     Returns
     -------
     Path
-        ``path``.
+        The bag written.
 
     Raises
     ------
@@ -124,6 +144,8 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
     if storage not in STORAGES:
         raise ConfigError(f'storage must be one of {sorted(STORAGES)}, got {storage!r}')
     path = Path(path)
+    if storage == 'ros1' and path.suffix != '.bag':
+        path = path.with_name(path.name + '.bag')
     if path.exists():
         raise BagError(f'{path} already exists')
     ts = jazzy_typestore()
@@ -142,8 +164,11 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
                           np.arange(2)])
     order = np.lexsort((idx, kinds, times))
     starts = np.concatenate(([0], trial.chunk_ends[:-1]))
-    wrench_raw = wrench_cdr(stamp_ns=stamp_ns, force=trial.force, torque=trial.torque)
     samples = trial.audio
+    if storage == 'ros1':
+        return _write_ros1(trial=trial, path=path, order=order, kinds=kinds, idx=idx,
+                           times=times, stamp_ns=stamp_ns, starts=starts, audio=audio)
+    wrench_raw = wrench_cdr(stamp_ns=stamp_ns, force=trial.force, torque=trial.torque)
     try:
         writer = Writer(path, version=9, storage_plugin=STORAGES[storage])
         with writer:
@@ -160,6 +185,32 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
                     writer.write(c_a, t, int16_multiarray_cdr(chunk))
                 else:
                     writer.write(c_t, t, ts.serialize_cdr(Bool(data=(i == 0)), TRUTH_TYPE))
+    except Exception as err:  # rosbags raises its own and OS errors
+        raise BagError(f'cannot write bag {path}: {err}') from err
+    return path
+
+
+def _write_ros1(*, trial: Trial, path: Path, order, kinds, idx, times, stamp_ns,
+                starts, audio: bool = True) -> Path:
+    store = get_typestore(Stores.ROS1_NOETIC)
+    values = np.hstack([trial.force, trial.torque])
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with Ros1Writer(path) as writer:
+            c_w = writer.add_connection(WRENCH_TOPIC, WRENCH_TYPE, typestore=store)
+            c_a = (writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=store) if audio
+                   else None)
+            c_t = writer.add_connection(TRUTH_TOPIC, TRUTH_TYPE, typestore=store)
+            for k in order:
+                kind, i, t = kinds[k], int(idx[k]), int(times[k])
+                if kind == 0:
+                    writer.write(c_w, t, ros1_wrench(stamp_ns=int(stamp_ns[i]),
+                                                     values=values[i], seq=i))
+                elif kind == 1:
+                    writer.write(c_a, t, ros1_int16_multiarray(
+                        trial.audio[starts[i]:trial.chunk_ends[i]]))
+                else:
+                    writer.write(c_t, t, bytes([i == 0]))
     except Exception as err:  # rosbags raises its own and OS errors
         raise BagError(f'cannot write bag {path}: {err}') from err
     return path
@@ -233,3 +284,21 @@ def write_manifest(*, trials: Iterable[Trial | Mapping], out_dir: Path,
     except (OSError, ValueError) as err:
         raise BagError(f'cannot write manifest {file}: {err}') from err
     return file
+
+
+def write_trials(*, trials: Iterable[Trial], out_dir: Path, storage: str = 'sqlite3',
+                 settings: Mapping | None = None) -> tuple[list, Path]:
+    """
+    Write each trial's bag into ``out_dir`` and then the manifest of them all.
+
+    Returns
+    -------
+    (list of dict, Path)
+        The manifest records (:func:`manifest_entry`) and the manifest file.
+
+    """
+    records = []
+    for trial in trials:
+        write_trial_bag(trial=trial, path=Path(out_dir) / trial.name, storage=storage)
+        records.append(manifest_entry(trial))
+    return records, write_manifest(trials=records, out_dir=out_dir, settings=settings)

@@ -44,7 +44,13 @@ sets above draw exactly what they drew before the families existed):
     a contact without useful sound (far or muted microphone) and other ego-noise families (a
     loud fan, gear whine, intermittent servo noise).
 
-``'families'`` is an alias for the six new families and ``'wide'`` for all twelve sets.
+``'real_sounds'``
+    the contact sound, the knocks on the hand and the table, the room background and the
+    arm's drive noise are real recordings (:mod:`contact_detector.sim.sound_bank`, fetched by
+    ``tools/fetch_sounds.sh``); the F/T is the simulator's.
+
+``'families'`` is an alias for the six new families and ``'wide'`` for those twelve sets;
+``'real_sounds'`` needs the fetched sound bank, so no alias includes it.
 Parameter names carry their unit as suffix
 (``_s`` seconds, ``_hz``, ``_m``, ``_mps`` m/s, ``_kg``, ``_n`` newton, ``_nm`` newton metre,
 ``_npm`` N/m, ``_fs`` fraction of int16 full scale, ``_deg``, ``_db``); the table in
@@ -276,6 +282,10 @@ FAMILY_DEFAULTS: dict[str, object] = {
     'ego_family': 'motor',          # 'motor' (whine + broadband), 'fan', 'gear', 'servo'
     'ego_extra_rms_fs': 0.0,        # level of the extra ego-noise family
     'push_horizon_s': 6.0,          # longest push searched for the stop
+    # 'real': contact, knocks, room and ego noise are recordings (contact_detector.sim.sound_bank)
+    'sound_source': 'synthetic',
+    'real_room_rms_fs': 0.0,        # level of the recorded room background
+    'real_ego_rms_fs': 0.0,         # level of the recorded drive noise at full speed
 }
 
 _FAMILY_STOP = {'push_horizon_s': Range(15.0, 15.0)}
@@ -295,7 +305,13 @@ _F_SPRING = {
     'stop_load_frac': Range(0.3, 3.0, log=True),
     **_FAMILY_STOP,
 }
-_SPRING = {'object_mass_kg': Range(0.3, 0.9)}
+_SPRING = {
+    'object_mass_kg': Range(0.3, 0.9),
+    'arm_stiffness_npm': Range(400.0, 2500.0, log=True),
+    'descent_speed_mps': Range(0.01, 0.04),
+    'stop_latency_s': Range(0.001, 0.005),  # a quick stop: partial transfer stays partial
+    'stop_decel_s': Range(0.005, 0.02),
+}
 _F_COMPLIANT = {
     'contact_model': Choice(('compliant',)),
     'transfer_s': Range(0.1, 0.5),
@@ -335,6 +351,13 @@ _F_QUIET = {
     **_FAMILY_STOP,
 }
 _QUIET = {'whine_hz': Range(80.0, 3000.0, log=True)}
+_F_REAL = {
+    'sound_source': Choice(('real',)),
+    'real_room_rms_fs': Range(0.001, 0.006, log=True),
+    'real_ego_rms_fs': Range(0.001, 0.006, log=True),
+    'contact_sound_db': Range(-6.0, 3.0),
+    **_FAMILY_STOP,
+}
 
 #: Exogenous event kinds of the hit plan ('mixed' draws one of them per event).
 EVENT_KINDS = ('hand', 'table', 'touch', 'brush', 'setdown')
@@ -433,6 +456,8 @@ CONDITION_SETS: dict[str, ConditionSet] = {
               _EXOGENOUS, _F_EXOGENOUS, ('mixed', 'touch', 'brush', 'setdown')),
         _make('quiet_contact', 'contact without useful sound; fan, gear or servo ego noise',
               _QUIET, _F_QUIET),
+        _make('real_sounds', 'recorded contact, knock, room and drive sounds (needs the sound '
+              'bank: tools/fetch_sounds.sh)', {}, _F_REAL),
     )
 }
 
@@ -440,6 +465,10 @@ CONDITION_SETS: dict[str, ConditionSet] = {
 ORIGINAL_SETS = ('paper', 'heavy', 'soft', 'noisy', 'gain', 'odd_chunking')
 #: The structurally different families.
 FAMILY_SETS = ('geometry', 'spring', 'compliant', 'approach', 'exogenous', 'quiet_contact')
+
+#: Families whose audio comes from recordings (need the fetched sound bank, so no alias
+#: includes them: ``'wide'`` stays what it was).
+REAL_SOUND_SETS = ('real_sounds',)
 
 #: Aliases that expand to several condition sets.
 ALIASES: dict[str, tuple[str, ...]] = {'all': ORIGINAL_SETS, 'families': FAMILY_SETS,
@@ -513,20 +542,21 @@ def ranges_markdown() -> str:
             spec = CONDITION_SETS[name].ranges[param]
             cells.append(spec.describe() if spec != base else '')
         lines.append('| ' + ' | '.join(cells) + ' |')
-    lines += ['', '| parameter | default | ' + ' | '.join(FAMILY_SETS) + ' |',
-              '| --- ' * (len(FAMILY_SETS) + 1) + '| --- |']
+    families = FAMILY_SETS + REAL_SOUND_SETS
+    lines += ['', '| parameter | default | ' + ' | '.join(families) + ' |',
+              '| --- ' * (len(families) + 1) + '| --- |']
     paper = CONDITION_SETS['paper'].ranges
-    overridden = sorted({k for f in FAMILY_SETS for k, v in CONDITION_SETS[f].ranges.items()
+    overridden = sorted({k for f in families for k, v in CONDITION_SETS[f].ranges.items()
                          if v != paper[k]})
     for param in overridden:
         cells = [f'`{param}`', paper[param].describe()]
-        for name in FAMILY_SETS:
+        for name in families:
             spec = CONDITION_SETS[name].ranges[param]
             cells.append(spec.describe() if spec != paper[param] else '')
         lines.append('| ' + ' | '.join(cells) + ' |')
     for param in FAMILY_DEFAULTS:
         cells = [f'`{param}`', _describe(FAMILY_DEFAULTS[param])]
-        for name in FAMILY_SETS:
+        for name in families:
             spec = CONDITION_SETS[name].family.get(param)
             cells.append(_describe(spec) if spec is not None else '')
         lines.append('| ' + ' | '.join(cells) + ' |')

@@ -25,8 +25,10 @@ Randomness
 ``np.random.default_rng([seed, index])`` draws the parameters (:mod:`.conditions`); independent
 streams ``[seed, index, k]`` draw the hit plan (k=1), the F/T sensor noise (k=2), the audio
 (k=3), the chunking (k=4), the geometry (k=5) and, for the families only, the family
-parameters and hit kind (k=6). The hit plan therefore never changes the other parameters:
-``simulate_trial(..., hits='none')`` is the same trial without its exogenous impacts.
+parameters and hit kind (k=6); the 'real_sounds' family draws its audio (which recordings,
+where they start, the microphone's AGC phase) from k=7 instead of k=3. The hit plan therefore
+never changes the other parameters: ``simulate_trial(..., hits='none')`` is the same trial
+without its exogenous impacts.
 """
 
 from dataclasses import dataclass, field
@@ -36,6 +38,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from contact_detector.errors import ConfigError
+from contact_detector.sim import sound_bank
 from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_KINDS, get_condition,
                                              resolve_conditions)
 
@@ -528,7 +531,7 @@ def _ft(s: _Setup, *, n_out: int, ramps: list, tl: dict, hits: list[_Hit],
                 comps.append((f, np.asarray(h.direction), np.asarray(h.point)))
             else:  # pushing the arm: the wrist feels the inertial reaction and the mode
                 comps.append((0.15 * f, np.asarray(h.direction), s.r_load))
-            exc += 0.3 * np.gradient(f, dt) * 0.05 * float(np.dot(h.direction, s.mode_dir))
+            exc += 0.3 * f * float(np.dot(h.direction, s.mode_dir))
         elif h.kind == 'brush':
             tt = t - th
             edge = np.clip(np.minimum(tt, h.dur - tt) / 0.03, 0.0, 1.0)
@@ -692,11 +695,7 @@ def _audio(*, p: dict, q: dict, rng: np.random.Generator, rate: int, n: int, ram
             clatter.append([tc, amp])
     facts['clatter'] = sorted(clatter)
     # robot ego noise while the motors turn: harmonic whine (pitch ~ speed) + broadband
-    v_d = p['descent_speed_mps']
-    ti = np.arange(0.0, duration + 0.01, 0.001)
-    _, vi, _ = _ramps(ramps, ti)
-    speed = np.interp(t, ti, np.abs(vi)) / v_d
-    level = np.minimum(speed, 1.5) ** 0.7
+    speed, level = _motion_level(p=p, ramps=ramps, t=t, duration=duration)
     phase = 2 * np.pi * np.cumsum(p['whine_hz'] * np.minimum(speed, 2.0)) / rate
     moving = np.nonzero(level > 0)[0]
     whine = np.zeros(len(moving))
@@ -712,9 +711,7 @@ def _audio(*, p: dict, q: dict, rng: np.random.Generator, rate: int, n: int, ram
 
     # the contact sound: glass modes (bright) + table modes, loudness ~ speed and hardness
     delay = p['mic_distance_m'] / SOUND_SPEED
-    peak = p['contact_amp_fs'] * p['hardness'] * (tl['v_c'] / REF_SPEED)
-    if q['contact_sound_db'] != 0.0:
-        peak *= 10 ** (q['contact_sound_db'] / 20)
+    peak = _contact_peak(p=p, q=q, tl=tl)
     bright = p['brightness']
     lo, hi = p['table_modes_hz']
     gf, gd, ga = _mode_set(rng, n=int(rng.integers(2, 5)), lo=1000.0, hi=8000.0,
@@ -761,20 +758,7 @@ def _audio(*, p: dict, q: dict, rng: np.random.Generator, rate: int, n: int, ram
                        attack_s=float(rng.uniform(0.0003, 0.003)), click_amp=0.3 * h.sound_amp,
                        click_decay_s=0.0015, rng=rng)
         else:  # 'touch' (a faint rustle) or 'brush' (scraping, stick-slip modulated)
-            i0 = max(0, int(th * rate))
-            i1 = min(n, int((th + h.dur) * rate))
-            if i1 - i0 < 8:
-                continue
-            tt = np.arange(i1 - i0) / rate
-            if h.kind == 'touch':
-                noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(200.0, 2000.0))
-                env = 0.5 * (1 - np.cos(2 * np.pi * tt / h.dur))
-            else:
-                noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(1000.0, 6000.0))
-                slip = float(rng.uniform(8.0, 30.0))
-                env = np.clip(np.minimum(tt, h.dur - tt) / 0.02, 0.0, 1.0) * (
-                    0.6 + 0.4 * np.abs(np.sin(np.pi * slip * tt + rng.uniform(0, np.pi))))
-            x[i0:i1] += h.sound_amp * env * noise
+            _add_rustle(x, h=h, th=th, rng=rng, rate=rate)
 
     # ego-noise families besides the motor whine
     fam = q['ego_family']
@@ -812,12 +796,134 @@ def _audio(*, p: dict, q: dict, rng: np.random.Generator, rate: int, n: int, ram
     if room is not None:
         x = room
 
-    # microphone: gain with slow AGC-like changes, DC offset, int16 with clipping
+    audio, facts['clipped_samples'] = _microphone(x, p=p, rng=rng, t=t)
+    return audio, facts
+
+
+def _motion_level(*, p: dict, ramps: list, t: np.ndarray,
+                  duration: float) -> tuple[np.ndarray, np.ndarray]:
+    """Arm speed / descent speed at the audio times ``t``, and the ego-noise level from it."""
+    v_d = p['descent_speed_mps']
+    ti = np.arange(0.0, duration + 0.01, 0.001)
+    _, vi, _ = _ramps(ramps, ti)
+    speed = np.interp(t, ti, np.abs(vi)) / v_d
+    return speed, np.minimum(speed, 1.5) ** 0.7
+
+
+def _contact_peak(*, p: dict, q: dict, tl: dict) -> float:
+    """Contact sound peak (fraction of full scale): ~ contact speed and hardness."""
+    peak = p['contact_amp_fs'] * p['hardness'] * (tl['v_c'] / REF_SPEED)
+    if q['contact_sound_db'] != 0.0:
+        peak *= 10 ** (q['contact_sound_db'] / 20)
+    return peak
+
+
+def _add_rustle(x: np.ndarray, *, h: _Hit, th: float, rng: np.random.Generator,
+                rate: int) -> None:
+    """Add a touch's faint rustle or a brush's stick-slip scraping starting at ``th`` s."""
+    i0 = max(0, int(th * rate))
+    i1 = min(len(x), int((th + h.dur) * rate))
+    if i1 - i0 < 8:
+        return
+    tt = np.arange(i1 - i0) / rate
+    if h.kind == 'touch':
+        noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(200.0, 2000.0))
+        env = 0.5 * (1 - np.cos(2 * np.pi * tt / h.dur))
+    else:
+        noise = _shaped_noise(rng, i1 - i0, rate, _band_shape(1000.0, 6000.0))
+        slip = float(rng.uniform(8.0, 30.0))
+        env = np.clip(np.minimum(tt, h.dur - tt) / 0.02, 0.0, 1.0) * (
+            0.6 + 0.4 * np.abs(np.sin(np.pi * slip * tt + rng.uniform(0, np.pi))))
+    x[i0:i1] += h.sound_amp * env * noise
+
+
+def _microphone(x: np.ndarray, *, p: dict, rng: np.random.Generator,
+                t: np.ndarray) -> tuple[np.ndarray, int]:
+    """Gain with slow AGC-like changes, DC offset, int16 with clipping; and the clip count."""
     gain_db = p['agc_depth_db'] * np.sin(2 * np.pi * p['agc_hz'] * t + rng.uniform(0, 2 * np.pi))
     y = x * (p['mic_gain'] * 10 ** (gain_db / 20)) * 32767.0 + p['mic_dc_lsb']
     clipped = int(np.count_nonzero(np.abs(y) > 32767.0))
-    audio = np.clip(np.round(y), -32768, 32767).astype(np.int16)
-    facts['clipped_samples'] = clipped
+    return np.clip(np.round(y), -32768, 32767).astype(np.int16), clipped
+
+
+def _place(x: np.ndarray, *, data: np.ndarray, onset: int, t0: float, rate: int,
+           peak: float) -> None:
+    """Add a recorded impulse scaled to ``peak`` with its onset sample at ``t0`` s."""
+    i0 = int(round(t0 * rate)) - onset
+    a, b = max(0, i0), min(len(x), i0 + len(data))
+    if b > a:
+        x[a:b] += peak * data[a - i0:b - i0]
+
+
+def _loop(data: np.ndarray, *, n: int, rate: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` samples of a recording repeated from a random offset, equal-power cross-fades."""
+    f = max(1, min(len(data) // 4, int(round(sound_bank.FADE_S * rate))))
+    y = np.roll(data, -int(rng.integers(0, len(data))))
+    k = np.arange(f) / f
+    win = np.ones(len(y))
+    win[:f] = np.sin(0.5 * np.pi * k)
+    win[-f:] = np.cos(0.5 * np.pi * k)
+    out = np.zeros(n + len(y))
+    step = len(y) - f
+    for pos in range(0, n, step):
+        out[pos:pos + len(y)] += y * (win if pos else np.concatenate((np.ones(f), win[f:])))
+    return out[:n]
+
+
+def _audio_real(*, p: dict, q: dict, bank: 'sound_bank.SoundBank', rng: np.random.Generator,
+                rate: int, n: int, ramps: list, tl: dict, hits: list[_Hit], anchors: dict,
+                duration: float) -> tuple[np.ndarray, dict]:
+    """
+    Microphone signal of the 'real_sounds' family as int16 and a dict of audio facts.
+
+    Recordings are placed where :func:`_audio` puts its synthetic sounds, then the same
+    microphone (:func:`_microphone`) applies.
+
+    Room: one 'room' recording looped at RMS ``real_room_rms_fs``. Drive noise: one 'ego'
+    recording looped at RMS ``real_ego_rms_fs`` times the ego-noise level of the arm's speed.
+    Contact (and bounce): a 'contact' recording with peak :func:`_contact_peak` and its onset
+    at ``onset + mic delay``. Hits: 'hand' and 'table' recordings at peak ``sound_amp``; a
+    set-down is a 'contact' recording; touches and brushes keep the synthetic rustle.
+    """
+    def pick(role: str) -> sound_bank.Clip:
+        clips = bank.clips[role]
+        return clips[int(rng.integers(0, len(clips)))]
+
+    t = np.arange(n) / rate
+    room = pick('room')
+    x = q['real_room_rms_fs'] * _loop(bank.at_rate(room, rate)[0], n=n, rate=rate, rng=rng)
+    room_only = x.copy() if q['mic_mode'] == 'noise_only' else None
+    _, level = _motion_level(p=p, ramps=ramps, t=t, duration=duration)
+    ego = pick('ego')
+    x += level * q['real_ego_rms_fs'] * _loop(bank.at_rate(ego, rate)[0], n=n, rate=rate,
+                                              rng=rng)
+    delay = p['mic_distance_m'] / SOUND_SPEED
+    peak = _contact_peak(p=p, q=q, tl=tl)
+    clip = pick('contact')
+    data, onset = bank.at_rate(clip, rate)
+    placed = [{'role': 'contact', 'clip': clip.name, 't': tl['onset'] + delay, 'peak_fs': peak}]
+    if p['bounce']:
+        placed.append({'role': 'contact', 'clip': clip.name,
+                       't': tl['onset'] + delay + float(rng.uniform(0.005, 0.04)),
+                       'peak_fs': peak * float(rng.uniform(0.2, 0.6))})
+    for item in placed:
+        _place(x, data=data, onset=onset, t0=item['t'], rate=rate, peak=item['peak_fs'])
+    for h in hits:
+        th = h.time(anchors) + delay
+        if h.kind in ('touch', 'brush'):
+            _add_rustle(x, h=h, th=th, rng=rng, rate=rate)
+            continue
+        role = h.kind if h.kind in ('hand', 'table') else 'contact'
+        clip = pick(role)
+        data, onset = bank.at_rate(clip, rate)
+        _place(x, data=data, onset=onset, t0=th, rate=rate, peak=h.sound_amp)
+        placed.append({'role': role, 'clip': clip.name, 't': th, 'peak_fs': h.sound_amp})
+    if room_only is not None:
+        x = room_only
+    facts = {'contact_peak_fs': peak, 'sound_bank': bank.fingerprint,
+             'sound_bank_package': f'{sound_bank.PACKAGE} {bank.package_version}',
+             'real_room_clip': room.name, 'real_ego_clip': ego.name, 'real_clips': placed}
+    audio, facts['clipped_samples'] = _microphone(x, p=p, rng=rng, t=t)
     return audio, facts
 
 
@@ -916,6 +1022,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     if cond.hit_cycle != DEFAULT_HIT_CYCLE:
         drawn_kind = cond.hit_cycle[int(fam_rng.integers(0, len(cond.hit_cycle)))]
     hit_kind = hits if hits is not None else drawn_kind
+    # the 'real_sounds' family: recordings from the fetched bank (ConfigError if missing)
+    bank = sound_bank.load_bank() if q['sound_source'] == 'real' else None
     geo_rng = np.random.default_rng([seed, index, 5])
     hit_rng = np.random.default_rng([seed, index, 1])
     noise_rng = np.random.default_rng([seed, index, 2])
@@ -1073,8 +1181,15 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     n_audio = int(math.floor(duration * audio_rate))
     ends, jitter, n_audio = _chunks(p=p, rng=chunk_rng, n=n_audio, rate=audio_rate,
                                     chunk_size=chunk_size)
-    audio, audio_facts = _audio(p=p, q=q, rng=audio_rng, rate=audio_rate, n=n_audio, ramps=ramps,
-                                tl=tl2, hits=hit_plan, anchors=anchors, duration=duration)
+    if bank is not None:
+        real_rng = np.random.default_rng([seed, index, 7])
+        audio, audio_facts = _audio_real(p=p, q=q, bank=bank, rng=real_rng, rate=audio_rate,
+                                         n=n_audio, ramps=ramps, tl=tl2, hits=hit_plan,
+                                         anchors=anchors, duration=duration)
+    else:
+        audio, audio_facts = _audio(p=p, q=q, rng=audio_rng, rate=audio_rate, n=n_audio,
+                                    ramps=ramps, tl=tl2, hits=hit_plan, anchors=anchors,
+                                    duration=duration)
 
     # ---- absolute times and bookkeeping
     start = float(T0 + TRIAL_SPACING_S * index)

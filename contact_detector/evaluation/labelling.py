@@ -1,0 +1,430 @@
+r"""
+Hindsight labelling: propose a recording's contact onset from its whole F/T and audio.
+
+Pure numpy/scipy (no ROS, no rosbags): arrays in, a :class:`Proposal` out. Unlike the node,
+which must decide causally, this sees the whole recording and works in three steps.
+
+1. **The largest lasting load change.** Each F/T sample is a 6-vector
+   ``w = (F / sigma_F, T / sigma_T)`` in units of the sensor's noise (``sigma`` from the
+   median absolute deviation of the first differences, per group). Its running median over
+   ``smooth_s`` (which removes knocks and taps lasting tens of ms) is compared with the
+   recording's median ``w_ref``: the *shift* ``E(t) = |median_smooth(w)(t) - w_ref|`` is the
+   length of the vector change, so the sensor's orientation and tare do not matter. Runs with
+   ``E > level`` lasting at least ``min_lasting_s`` are candidates; the one with the largest
+   area ``sum E dt`` is the contact (a touch or a brush is shorter and smaller; the retreat
+   returns to ``w_ref`` and is the end of the same run).
+2. **Where the F/T leaves its baseline.** Walking back from the run's start to where ``E``
+   falls to its floor gives the pre-event baseline ``b``: the median of ``w`` over ``pre_s``
+   before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
+   the load change along it and ``sigma_y`` its MAD-based standard deviation in the baseline.
+   Searching backwards from where ``y`` reaches ``fit_frac`` of the change, sample ``m`` is the
+   first after the latest run of ``quiet_s`` with every ``|y| <= k_sigma sigma_y`` (a dip
+   after an impact spike does not stop the search; an isolated noise sample does not either
+   unless a whole quiet run precedes it). If ``y`` then reaches ``rise_k k_sigma sigma_y``
+   within ``fast_samples`` samples (a stiff contact) the onset is the middle of sample
+   ``m``'s averaging period, ``t_m - dt / 2``. Otherwise (a soft or compliant contact, whose
+   load rises slowly) a hinge ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, is fitted by least
+   squares from ``fit_pre_s`` before ``m`` to that level, where ``g_p`` is the ramp
+   ``(t - t0)_+^p`` (p = 1 or 2) averaged over the sample's period ``(t_j - dt, t_j]`` (the
+   sensor's ADC average),
+
+   .. math:: g_p(t_j; t_0) = \frac{(t_j - t_0)_+^{p+1} - (t_j - dt - t_0)_+^{p+1}}{(p+1)\,dt}
+
+   and ``t0`` is searched in ``[t_m - back_samples dt, t_m]`` on a grid of ``dt / 20``
+   (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
+   winning. On a busy baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times
+   the sensor's noise, where the ``k_sigma`` band is late by the oscillation's size) a linear
+   hinge through the ``busy_back_s`` before ``m`` up to where the search started sets ``t0``
+   anywhere in that span.
+3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared
+   with its noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame
+   in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
+   floor, with the mean of it and the next three frames above ``audio_hold`` times that,
+   marks a sound; its onset is the first sample in that frame or the one before with
+   ``|x - median| > audio_k * sigma_noise`` (MAD-based). A sound sets the
+   time (audio has sample resolution); the sound's travel time from the hand to the
+   microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
+   which are found late rather than early, the window starts at ``audio_slow_lo_s``; after
+   a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``.
+
+The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
+how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
+found near the F/T onset, else 0.8.
+"""
+
+import dataclasses
+from dataclasses import dataclass, field
+import math
+from typing import Optional
+
+import numpy as np
+
+from contact_detector.errors import InputError
+
+#: Reasons a recording gets no onset.
+NO_CHANGE = 'no lasting load change'
+TOO_SHORT = 'recording shorter than 1 s of F/T'
+
+
+@dataclass(frozen=True)
+class LabelSettings:
+    """
+    Settings of :func:`propose_onset` (seconds unless stated).
+
+    Attributes
+    ----------
+    smooth_s : float
+        Running-median length for the shift ``E`` (removes knocks of tens of ms).
+    min_lasting_s : float
+        Shortest run of ``E > level`` that counts as a lasting load change.
+    min_shift : float
+        Lowest ``level`` in noise units.
+    level_frac : float
+        ``level = max(min_shift, level_frac * max E)``.
+    pre_s : float
+        Pre-event baseline window before the run's start.
+    fit_pre_s : float
+        The hinge fit starts this long (at least 12 samples) before sample ``m``.
+    fit_frac : float
+        The backward search starts where ``y`` first reaches this fraction of the change.
+    k_sigma : float
+        Baseline band in robust standard deviations of ``y``.
+    quiet_s : float
+        Length of the quiet run (at least 3 samples) that ends the backward search.
+    rise_k : float
+        A rise to ``rise_k * k_sigma`` sigmas within ``fast_samples`` samples is fast.
+    fast_samples : int
+        See ``rise_k``.
+    back_samples : float
+        The hinge's onset is searched up to this many sample periods before ``t_m``.
+    busy_sigma : float
+        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is busy.
+    busy_back_s : float
+        On a busy baseline, a linear hinge through ``busy_back_s`` before ``m`` up to where
+        the search started sets the onset, anywhere in that span.
+    audio_lo_s, audio_hi_s : float
+        Window around the F/T onset where a contact sound may start.
+    audio_slow_lo_s : float
+        ``audio_lo_s`` after a slow or busy rise; after a fast one it is at most two sample
+        periods.
+    frame_s : float
+        Audio power frame.
+    audio_rise : float
+        Power ratio over the noise floor that marks a sound (5 = +7 dB).
+    audio_hold : float
+        The mean power of that frame and the next three must exceed ``audio_hold *
+        audio_rise``.
+    audio_k : float
+        Sample threshold in robust noise standard deviations for the sound's first sample.
+
+    """
+
+    smooth_s: float = 0.1
+    min_lasting_s: float = 0.25
+    min_shift: float = 8.0
+    level_frac: float = 0.3
+    pre_s: float = 0.3
+    fit_pre_s: float = 0.1
+    fit_frac: float = 0.5
+    k_sigma: float = 3.5
+    quiet_s: float = 0.07
+    back_samples: float = 2.0
+    busy_sigma: float = 4.0
+    busy_back_s: float = 0.3
+    rise_k: float = 3.0
+    fast_samples: int = 2
+    audio_lo_s: float = -0.05
+    audio_slow_lo_s: float = -0.15
+    audio_hi_s: float = 0.03
+    frame_s: float = 0.002
+    audio_rise: float = 5.0
+    audio_hold: float = 0.8
+    audio_k: float = 5.0
+
+
+@dataclass
+class Proposal:
+    """
+    The proposed onset of one recording.
+
+    Attributes
+    ----------
+    onset_t : float or None
+        Proposed contact onset, s (None: see ``reason``).
+    confidence : float
+        In [0, 1]; 0 when there is no onset.
+    reason : str
+        Why there is no onset ('' when there is one).
+    source : str
+        'audio' (the contact sound set the time), 'ft' or ''.
+    ft_onset_t, audio_onset_t : float or None
+        The F/T hinge's ``t0`` and the sound's onset, s.
+    shift_t, shift : np.ndarray
+        Times (s) and the vector shift ``E`` (noise units) for review figures.
+    step : float
+        The run's peak shift in noise units.
+
+    """
+
+    onset_t: Optional[float]
+    confidence: float
+    reason: str = ''
+    source: str = ''
+    ft_onset_t: Optional[float] = None
+    audio_onset_t: Optional[float] = None
+    step: float = 0.0
+    shift_t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    shift: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+
+def noise_sigma(x: np.ndarray) -> float:
+    """
+    Robust noise standard deviation of a group of channels, shape (n, k).
+
+    ``sigma = sqrt(mean_k s_k^2)`` with ``s_k = 1.4826 MAD(diff x_k) / sqrt 2``; a channel
+    whose MAD is 0 (quantised, flat) uses the standard deviation of its differences; the
+    result is at least 1e-9.
+    """
+    d = np.diff(np.asarray(x, dtype=float), axis=0)
+    if len(d) == 0:
+        return 1e-9
+    mad = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0)
+    s = np.where(mad > 0, mad, np.std(d, axis=0)) / math.sqrt(2.0)
+    return max(float(np.sqrt(np.mean(s ** 2))), 1e-9)
+
+
+def _running_median(x: np.ndarray, n: int) -> np.ndarray:
+    from scipy.ndimage import median_filter
+    if n <= 1:
+        return x
+    return median_filter(x, size=(n, 1), mode='nearest')
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index runs where ``mask`` is True."""
+    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    d = np.diff(m)
+    return list(zip(np.nonzero(d == 1)[0].tolist(), np.nonzero(d == -1)[0].tolist()))
+
+
+def hinge_fit(*, t: np.ndarray, y: np.ndarray, dt: float, lo: float, hi: float,
+              powers: tuple = (1, 2), step_frac: float = 0.05) -> tuple[float, int, float]:
+    """
+    Least-squares hinge ``y = c + a g_p(t; t0)`` (module doc), ``t0`` in ``[lo, hi]``.
+
+    Parameters
+    ----------
+    t, y : np.ndarray, shape (n,)
+        Sample times (s) and values.
+    dt : float
+        Sample period, s (the averaging period of ``g_p``).
+    lo, hi : float
+        Search range of ``t0``, s.
+    powers : tuple of int
+        Ramp powers tried.
+    step_frac : float
+        Grid step of ``t0`` as a fraction of ``dt``.
+
+    Returns
+    -------
+    (t0, p, sse) : tuple
+        Best onset (s), its power and squared residual.
+
+    """
+    grid = np.arange(lo, hi + 1e-12, dt * step_frac)
+    best = (float(lo), powers[0], math.inf)
+    n = len(y)
+    if n < 3 or len(grid) == 0:
+        return best
+    ym = y.mean()
+    yc = y - ym
+    syy = float(yc @ yc)
+    for p in powers:
+        a1 = np.maximum(t[None, :] - grid[:, None], 0.0) ** (p + 1)
+        a0 = np.maximum(t[None, :] - dt - grid[:, None], 0.0) ** (p + 1)
+        g = (a1 - a0) / ((p + 1) * dt)
+        gc = g - g.mean(axis=1, keepdims=True)
+        sgg = np.einsum('ij,ij->i', gc, gc)
+        sgy = gc @ yc
+        ok = (sgg > 0) & (sgy > 0)
+        sse = np.where(ok, syy - sgy ** 2 / np.where(sgg > 0, sgg, 1.0), syy)
+        k = int(np.argmin(sse))
+        if sse[k] < best[2]:
+            best = (float(grid[k]), p, float(sse[k]))
+    return best
+
+
+def audio_onset(*, audio: np.ndarray, rate: float, t0: float, around: float,
+                settings: LabelSettings = LabelSettings()) -> tuple[Optional[float], float]:
+    """
+    Onset of a sound near ``around`` (s), and its power ratio over the noise floor.
+
+    Parameters
+    ----------
+    audio : np.ndarray, shape (n,)
+        Samples (any scale).
+    rate : float
+        Sample rate, Hz.
+    t0 : float
+        Time of sample 0, s.
+    around : float
+        The F/T onset, s; the sound may start in ``[around + audio_lo_s, around +
+        audio_hi_s]``.
+    settings : LabelSettings
+
+    Returns
+    -------
+    (onset, ratio) : tuple
+        Onset time in s (None without a sound) and the largest frame power in the window
+        divided by the floor.
+
+    """
+    s = settings
+    x = np.asarray(audio, dtype=float)
+    fl = max(1, int(round(s.frame_s * rate)))
+
+    def idx(tt: float) -> int:
+        return int(round((tt - t0) * rate))
+
+    n0, n1 = idx(around - 0.35), idx(around - 0.06)
+    w0, w1 = idx(around + s.audio_lo_s), idx(around + s.audio_hi_s)
+    if n0 < 0 or w1 + 4 * fl > len(x) or n1 - n0 < 4 * fl:
+        return None, 0.0
+    noise = x[n0:n1]
+    nf = (len(noise) // fl) * fl
+    floor = float(np.median(np.mean(noise[:nf].reshape(-1, fl) ** 2, axis=1)))
+    floor = max(floor, 1e-20)
+    seg = x[w0:w1 + 4 * fl]
+    m = (len(seg) // fl) * fl
+    power = np.mean(seg[:m].reshape(-1, fl) ** 2, axis=1) / floor
+    n_win = max(1, (w1 - w0) // fl)
+    ratio = float(power[:n_win + 1].max()) if len(power) else 0.0
+    hot = power > s.audio_rise
+    for k in range(min(n_win, len(power) - 4)):
+        if hot[k] and power[k:k + 4].mean() > s.audio_hold * s.audio_rise:
+            med = np.median(noise)
+            sd = max(1.4826 * float(np.median(np.abs(noise - med))), 1e-12)
+            a = max(w0 + (k - 1) * fl, 0)
+            seg2 = np.abs(x[a:w0 + (k + 1) * fl] - med)
+            over = np.nonzero(seg2 > s.audio_k * sd)[0]
+            j = a + (int(over[0]) if len(over) else fl)
+            return t0 + j / rate, ratio
+    return None, ratio
+
+
+def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
+                  audio: Optional[np.ndarray] = None, audio_rate: Optional[float] = None,
+                  audio_t0: Optional[float] = None,
+                  settings: LabelSettings = LabelSettings()) -> Proposal:
+    """
+    Propose the contact onset of one recording (module doc for the method).
+
+    Parameters
+    ----------
+    ft_t : np.ndarray, shape (n,)
+        F/T sample times, s, increasing.
+    force, torque : np.ndarray, shape (n, 3)
+        N and N m, any frame and tare.
+    audio : np.ndarray or None, shape (m,)
+        Audio samples (None: F/T only).
+    audio_rate : float or None
+        Audio sample rate, Hz.
+    audio_t0 : float or None
+        Time of audio sample 0, s.
+    settings : LabelSettings
+
+    Returns
+    -------
+    Proposal
+
+    Raises
+    ------
+    InputError
+        Shapes disagree or the times are not increasing.
+
+    """
+    s = settings
+    t = np.asarray(ft_t, dtype=float)
+    f = np.asarray(force, dtype=float)
+    q = np.asarray(torque, dtype=float)
+    if f.shape != (len(t), 3) or q.shape != (len(t), 3):
+        raise InputError(f'force {f.shape} and torque {q.shape} must be ({len(t)}, 3)')
+    if len(t) > 1 and not np.all(np.diff(t) > 0):
+        raise InputError('F/T times must increase')
+    if len(t) < 3 or t[-1] - t[0] < 1.0:
+        return Proposal(None, 0.0, reason=TOO_SHORT)
+    dt = float(np.median(np.diff(t)))
+    w = np.hstack([f / noise_sigma(f), q / noise_sigma(q)])
+    smooth = _running_median(w, int(round(s.smooth_s / dt)) | 1)
+    ref = np.median(w, axis=0)
+    shift = np.linalg.norm(smooth - ref, axis=1)
+    peak = float(shift.max())
+    level = max(s.min_shift, s.level_frac * peak)
+    runs = [(a, b) for a, b in _runs(shift > level) if (b - a) * dt >= s.min_lasting_s]
+    if not runs:
+        return Proposal(None, 0.0, reason=NO_CHANGE, shift_t=t, shift=shift)
+    areas = [float(shift[a:b].sum() * dt) for a, b in runs]
+    order = np.argsort(areas)[::-1]
+    a, b = runs[int(order[0])]
+    clarity = 1.0 - (areas[int(order[1])] / areas[int(order[0])] if len(runs) > 1 else 0.0)
+    # back to where the shift left its floor (the recording's typical shift)
+    floor = float(np.median(shift))
+    spread = 1.4826 * float(np.median(np.abs(shift - floor)))
+    floor_lvl = floor + min(max(4.0 * spread, 1.0), 0.1 * (level - floor))
+    i = a
+    while i > 0 and shift[i - 1] > floor_lvl:
+        i -= 1
+    n_pre = max(3, int(round(s.pre_s / dt)))
+    j1 = max(1, i - int(round(0.5 * s.smooth_s / dt)))
+    j0 = max(0, j1 - n_pre)
+    base = np.median(w[j0:j1], axis=0)
+    change = np.median(w[a:min(b, a + int(round(s.smooth_s / dt)) + 1)], axis=0) - base
+    u = change / max(float(np.linalg.norm(change)), 1e-12)
+    y = (w - base) @ u
+    base_y = y[j0:j1]
+    sd = max(1.4826 * float(np.median(np.abs(base_y - np.median(base_y)))), 1e-9)
+    target = max(s.fit_frac * float(np.linalg.norm(change)), s.k_sigma * sd)
+    reach = np.nonzero(y[i:b] >= target)[0]
+    r = i + (int(reach[0]) if len(reach) else 0)
+    # the latest sample ending a run of n_quiet samples within k_sigma of the baseline: the
+    # next one is the first that left it (short dips after an impact do not stop the search)
+    n_quiet = max(3, int(round(s.quiet_s / dt)))
+    quiet = np.convolve((y[:r + 1] > s.k_sigma * sd).astype(float), np.ones(n_quiet),
+                        mode='full')[:r + 1] == 0
+    quiet[:n_quiet - 1] = False
+    ends = np.nonzero(quiet)[0]
+    m = int(ends[-1]) + 1 if len(ends) else max(r, 1)
+    # fast rise: the onset is within the averaging period of sample m (its middle); slow
+    # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
+    ft_onset = float(t[m]) - 0.5 * dt
+    level_hi = min(s.rise_k * s.k_sigma * sd, 0.5 * float(np.linalg.norm(change)))
+    above = np.nonzero(y[m:b] >= level_hi)[0]
+    e = m + (int(above[0]) if len(above) else 0)
+    if sd > s.busy_sigma:
+        # a busy baseline (ripple, slosh: many times the sensor noise): the k_sigma search
+        # is late by up to the oscillation's size; a ramp fitted through it averages it out
+        k_start = max(0, m - int(round(s.busy_back_s / dt)))
+        ft_onset = hinge_fit(t=t[k_start:r + 1], y=y[k_start:r + 1], dt=dt,
+                             lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
+    elif e - m >= s.fast_samples:
+        k_start = max(0, m - max(12, int(round(s.fit_pre_s / dt))))
+        ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
+                             lo=float(t[m]) - s.back_samples * dt, hi=float(t[m]))[0]
+    slow = sd > s.busy_sigma or e - m >= s.fast_samples
+    confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
+    onset, source, a_on = ft_onset, 'ft', None
+    if audio is not None and audio_rate and audio_t0 is not None and len(audio):
+        # a slow or busy rise is found late rather than early: look further back for its sound
+        # after a fast rise the F/T onset is good to a sample: a sound starting much earlier
+        # is something else (a clatter, a knock)
+        lo = s.audio_slow_lo_s if slow else max(s.audio_lo_s, -2.0 * dt)
+        a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
+                                   around=ft_onset,
+                                   settings=dataclasses.replace(s, audio_lo_s=lo))
+        if a_on is not None:
+            onset, source = a_on, 'audio'
+        else:
+            confidence *= 0.8
+    return Proposal(onset_t=float(onset), confidence=float(round(confidence, 3)),
+                    source=source, ft_onset_t=float(ft_onset), audio_onset_t=a_on,
+                    step=peak, shift_t=t, shift=shift)

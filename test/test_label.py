@@ -1,0 +1,111 @@
+"""``contact-detector label``: hindsight onsets on simulated bags, unlabelled rows, train."""
+
+import csv
+import dataclasses
+
+import numpy as np
+import pytest
+
+from contact_detector.cli import label as label_cli
+from contact_detector.cli import train as train_cli
+from contact_detector.errors import InputError
+from contact_detector.evaluation.labelling import hinge_fit, NO_CHANGE, propose_onset
+from contact_detector.model.bundle import load_bundle
+from contact_detector.model.training import read_labels_csv
+from contact_detector.sim.bag_writer import write_trial_bag
+from contact_detector.sim.trial import simulate_trial
+
+#: (condition, index, storage): different families, a soft and a quiet contact, a ROS 1 bag.
+TRIALS = [('paper', 0, 'sqlite3'), ('soft', 1, 'sqlite3'), ('compliant', 2, 'ros1'),
+          ('quiet_contact', 3, 'mcap')]
+
+
+@pytest.fixture(scope='module')
+def labelled(tmp_path_factory):
+    root = tmp_path_factory.mktemp('label')
+    bags = root / 'bags'
+    truth = {}
+    for condition, index, storage in TRIALS:
+        trial = simulate_trial(seed=3, index=index, condition=condition)
+        path = write_trial_bag(trial=trial, path=bags / trial.name, storage=storage)
+        truth[path.name] = trial.onset_t
+    # the arm held still: the same load throughout, with the sensor's noise
+    still = simulate_trial(seed=3, index=9, condition='paper')
+    rng = np.random.default_rng(0)
+    n = len(still.wrench_t)
+    still = dataclasses.replace(
+        still, force=still.force[:1] + rng.normal(0, 0.05, (n, 3)),
+        torque=still.torque[:1] + rng.normal(0, 0.005, (n, 3)))
+    write_trial_bag(trial=still, path=bags / still.name)
+    out = root / 'labels.csv'
+    plots = root / 'plots'
+    assert label_cli.main([str(bags), '--out', str(out), '--plots', str(plots)]) == 0
+    with open(out) as handle:
+        rows = {r['bag']: r for r in csv.DictReader(handle)}
+    return {'bags': bags, 'csv': out, 'rows': rows, 'truth': truth, 'still': still.name,
+            'plots': plots, 'root': root}
+
+
+def test_label_finds_onsets_within_20_ms(labelled):
+    for bag, onset in labelled['truth'].items():
+        row = labelled['rows'][bag]
+        assert abs(float(row['onset_start']) - onset) <= 0.020, (bag, row)
+        assert float(row['onset_end']) == pytest.approx(float(row['onset_start']) + 0.1)
+        assert 0.0 < float(row['confidence']) <= 1.0
+        assert (labelled['plots'] / f'{bag}.png').stat().st_size > 10_000
+
+
+def test_a_bag_without_contact_gets_a_row_saying_why(labelled):
+    row = labelled['rows'][labelled['still']]
+    assert row['onset_start'] == '' and row['onset_end'] == ''
+    assert float(row['confidence']) == 0.0 and row['reason'] == NO_CHANGE
+
+
+def test_readers_skip_unlabelled_rows_with_a_warning(labelled):
+    with pytest.warns(UserWarning, match=f'{labelled["still"]} has no onset'):
+        onsets = read_labels_csv(labelled['csv'])
+    assert sorted(onsets) == sorted(labelled['truth'])
+
+
+def test_train_accepts_the_csv_label_writes(labelled):
+    model = labelled['root'] / 'm.npz'
+    with pytest.warns(UserWarning, match='no onset'):
+        assert train_cli.main([str(labelled['bags']), '--labels', str(labelled['csv']),
+                               '--no-events', '--jobs', '1', '--out', str(model)]) == 0
+    assert load_bundle(path=model).training['trials'] == len(TRIALS)
+
+
+def test_orientation_and_tare_do_not_matter():
+    trial = simulate_trial(seed=3, index=0, condition='paper')
+    base = propose_onset(ft_t=trial.wrench_t, force=trial.force, torque=trial.torque)
+    angle = 1.1
+    rot = np.array([[np.cos(angle), -np.sin(angle), 0.0], [np.sin(angle), np.cos(angle), 0.0],
+                    [0.0, 0.0, 1.0]])
+    moved = propose_onset(ft_t=trial.wrench_t, force=trial.force @ rot.T - 40.0,
+                          torque=trial.torque @ rot.T + 3.0)
+    assert moved.onset_t == pytest.approx(base.onset_t, abs=1e-3)
+    assert abs(base.onset_t - trial.onset_t) <= 0.020
+
+
+def test_a_knock_is_not_the_contact():
+    trial = simulate_trial(seed=3, index=0, condition='paper', hits='none')
+    force = trial.force.copy()
+    j = int(np.searchsorted(trial.wrench_t, trial.onset_t - 1.0))
+    force[j:j + 3] += [40.0, -30.0, 20.0]  # a 30 ms knock, larger than the contact
+    p = propose_onset(ft_t=trial.wrench_t, force=force, torque=trial.torque)
+    assert abs(p.onset_t - trial.onset_t) <= 0.020
+
+
+def test_hinge_fit_finds_a_ramp_between_samples():
+    dt = 0.01
+    t = np.arange(40) * dt + dt
+    t0 = 0.2237
+    # a ramp averaged over each sample's period (t - dt, t], as the sensor does
+    y = (np.maximum(t - t0, 0) ** 2 - np.maximum(t - dt - t0, 0) ** 2) / (2 * dt) * 50.0
+    fit, power, _ = hinge_fit(t=t, y=y, dt=dt, lo=0.1, hi=0.3)
+    assert power == 1 and fit == pytest.approx(t0, abs=dt / 20)
+
+
+def test_bad_shapes_are_refused():
+    with pytest.raises(InputError):
+        propose_onset(ft_t=np.arange(5.0), force=np.zeros((4, 3)), torque=np.zeros((5, 3)))

@@ -1,0 +1,174 @@
+"""Your robot, your data: labels CSV, evaluate --labels, train --with-sim, the tools/ helpers.
+
+The "recordings" are simulated trials written as ROS 1 bags at 125 Hz F/T with no manifest
+beside them, as a user's own bags come: their truth is what the labels CSV says.
+"""
+
+import json
+from pathlib import Path
+import subprocess
+import sys
+
+import pytest
+from rosbags.rosbag1 import Reader
+
+from contact_detector.cli import evaluate as evaluate_cli
+from contact_detector.cli import train as train_cli
+from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
+from contact_detector.model.bundle import load_bundle
+from contact_detector.sim import simulate_trials
+from contact_detector.sim.bag_writer import write_trial_bag
+
+ROOT = Path(__file__).resolve().parents[1]
+N_RECORDINGS = 3
+
+
+@pytest.fixture(scope='module')
+def recordings(tmp_path_factory):
+    root = tmp_path_factory.mktemp('robot')
+    bags = root / 'bags'
+    onsets = {}
+    for trial in simulate_trials(n=N_RECORDINGS, seed=5, conditions=['paper'], ft_rate=125.0):
+        bag = write_trial_bag(trial=trial, path=bags / f'{trial.name}.bag', storage='ros1')
+        onsets[bag.name] = trial.onset_t
+    return {'root': root, 'bags': bags, 'onsets': onsets}
+
+
+def write_labels(path: Path, rows: dict) -> Path:
+    lines = ['bag,onset_start,onset_end']
+    lines += [f'{bag},{t!r},{t!r}' for bag, times in rows.items() for t in times]
+    path.write_text('\n'.join(lines) + '\n')
+    return path
+
+
+def test_several_contacts_are_scored_each_as_if_re_armed():
+    outcomes = score_onsets(name='r', condition='', onsets=[6.0, 1.0, 9.0, 3.0],
+                            events=[0.5, 3.1, 6.7, 3.3])
+    assert [o.verdict for o in outcomes] == ['premature', 'detected', 'late', 'missed']
+    assert [o.name for o in outcomes] == ['r#1', 'r#2', 'r#3', 'r#4']
+    assert outcomes[1].latency_s == pytest.approx(0.1)
+    assert all(o.extra['recording'] == 'r' for o in outcomes)
+    # One contact: the verdict of score_trial with the first event as the release.
+    for events in ([], [0.2], [1.0, 1.2], [1.3, 5.0], [2.0]):
+        one = score_onsets(name='r', condition='c', onsets=[1.0], events=events)
+        ref = score_trial(truth=Truth(name='r', condition='c', onset_t=1.0),
+                          releases=events[:1], events=())
+        assert (one[0].verdict, one[0].latency_s, one[0].name) == (
+            ref.verdict, ref.latency_s, ref.name)
+
+
+def test_evaluate_takes_the_labels_csv_as_truth(recordings, tmp_path, capsys):
+    bags, onsets = recordings['bags'], recordings['onsets']
+    kw = ['--detector', 'forest', '--detector', 'threshold']
+    assert evaluate_cli.main([str(bags), *kw, '--report', str(tmp_path / 'topic')]) == 0
+    right = write_labels(tmp_path / 'right.csv', {b: [t] for b, t in onsets.items()})
+    assert evaluate_cli.main([str(bags), *kw, '--labels', str(right),
+                              '--report', str(tmp_path / 'csv')]) == 0
+    printed = capsys.readouterr().out
+    for bag in onsets:
+        assert f'| {bag} | 1 |' in printed          # the per-recording table
+    by_topic = json.loads((tmp_path / 'topic' / 'trials.json').read_text())
+    by_csv = json.loads((tmp_path / 'csv' / 'trials.json').read_text())
+    for name in ('forest', 'threshold'):
+        assert ([(o['name'], o['verdict'], o['release_t']) for o in by_topic[name]]
+                == [(o['name'], o['verdict'], o['release_t']) for o in by_csv[name]])
+    # Labels 3 s late turn the same releases premature: the CSV is the truth used.
+    late = write_labels(tmp_path / 'late.csv', {b: [t + 3.0] for b, t in onsets.items()})
+    assert evaluate_cli.main([str(bags), *kw, '--labels', str(late),
+                              '--report', str(tmp_path / 'late')]) == 0
+    shifted = json.loads((tmp_path / 'late' / 'trials.json').read_text())
+    for o, ref in zip(shifted['forest'], by_csv['forest']):
+        if ref['release_t'] is not None:
+            assert o['verdict'] == 'premature'
+            assert o['latency_s'] == pytest.approx(ref['latency_s'] - 3.0)
+    # ... and the per-recording table says by how much (release - label, ms)
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith('| trial')]
+    assert any(' early -29' in row or ' early -30' in row for row in rows)
+    summary = (tmp_path / 'csv' / 'summary.md').read_text()
+    assert '## Per recording' in summary and (tmp_path / 'csv' / 'recordings.png').stat().st_size
+
+
+def test_evaluate_scores_every_contact_of_a_recording(recordings, tmp_path, capsys):
+    bag = sorted(recordings['onsets'])[0]
+    onset = recordings['onsets'][bag]
+    labels = write_labels(tmp_path / 'two.csv', {bag: [onset, onset + 2.5]})
+    assert evaluate_cli.main([str(recordings['bags'] / bag), '--labels', str(labels),
+                              '--report', str(tmp_path / 'r')]) == 0
+    trials = json.loads((tmp_path / 'r' / 'trials.json').read_text())['forest']
+    assert [o['name'] for o in trials] == [f'{bag}#1', f'{bag}#2']
+    # the glass stays on the table: nothing new happens at the second "contact"
+    assert trials[1]['verdict'] == 'missed'
+    assert f'| {bag} | 2 |' in capsys.readouterr().out
+    # A recording the CSV does not name is refused, naming it.
+    other = sorted(recordings['onsets'])[1]
+    assert evaluate_cli.main([str(recordings['bags']), '--labels', str(labels)]) == 1
+    assert other in capsys.readouterr().err
+
+
+def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, capsys):
+    labels = write_labels(tmp_path / 'l.csv', {b: [t] for b, t in recordings['onsets'].items()})
+    sim = tmp_path / 'sim'
+    model = tmp_path / 'mine.npz'
+    args = [str(recordings['bags']), '--labels', str(labels), '--trees', '2', '--jobs', '1',
+            '--out', str(model)]
+    assert train_cli.main([*args, '--with-sim', '3', '--sim-dir', str(sim)]) == 0
+    sources = load_bundle(path=model).training['sources']
+    assert sources['recordings'] == {'count': 3, 'contacts': 3,
+                                     'bags': sorted(recordings['onsets']),
+                                     'labels': 'l.csv (--labels)'}
+    assert sources['simulated']['trials'] == 3 and sources['simulated']['kept_in'] == str(sim)
+    assert len(sources['simulated']['families']) == 3         # wide: one family per trial
+    assert sources['simulated']['ft_rate'] == 125.0
+    card = json.loads(model.with_name('mine.card.json').read_text())
+    assert card['training']['sources'] == sources
+    assert load_bundle(path=model).training['trials'] == 6
+    assert sorted(p.name for p in sim.glob('trial_*')) == [f'trial_000{i}' for i in range(3)]
+    capsys.readouterr()
+    # The kept trials are reused; a folder holding other trials is refused.
+    # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same)
+    manifest = json.loads((sim / 'manifest.json').read_text())
+    manifest['settings']['ft_rate'] = 124.6
+    (sim / 'manifest.json').write_text(json.dumps(manifest))
+    assert train_cli.main([*args, '--with-sim', '3', '--sim-dir', str(sim),
+                           '--no-events']) == 0
+    assert 'reusing 3 simulated trials' in capsys.readouterr().out
+    assert load_bundle(path=model).training['sources']['simulated']['ft_rate'] == 124.6
+    assert train_cli.main([*args, '--with-sim', '4', '--sim-dir', str(sim)]) == 1
+    assert 'holds other simulated trials' in capsys.readouterr().err
+    # Alone: the recordings only, and a temporary folder leaves nothing behind.
+    assert train_cli.main([*args, '--no-events']) == 0
+    assert set(load_bundle(path=model).training['sources']) == {'recordings'}
+    # Too few recordings for the split by recording: a clear error, not a traceback.
+    one = sorted(recordings['onsets'])[0]
+    capsys.readouterr()
+    assert train_cli.main([str(recordings['bags'] / one), *args[1:]]) == 1
+    assert 'needs at least 3 recordings, got 1' in capsys.readouterr().err
+
+
+def test_labels_from_a_topic_and_a_recording_cut_per_contact(recordings, tmp_path):
+    labels = tmp_path / 'truth.csv'
+    subprocess.run([sys.executable, ROOT / 'tools' / 'labels_from_topic.py',
+                    recordings['bags'], '--topic', '/contact_truth', '--field', 'data',
+                    '--out', labels], check=True, capture_output=True)
+    rows = [line.split(',') for line in labels.read_text().splitlines()[1:]]
+    assert {r[0]: float(r[1]) for r in rows} == pytest.approx(recordings['onsets'], abs=1e-6)
+    bag = sorted(recordings['onsets'])[0]
+    onset = recordings['onsets'][bag]
+    two = write_labels(tmp_path / 'two.csv', {bag: [onset - 3.0, onset]})
+    out = tmp_path / 'pieces'
+    subprocess.run([sys.executable, ROOT / 'tools' / 'split_recording.py',
+                    recordings['bags'] / bag, '--labels', two, '--out', out],
+                   check=True, capture_output=True)
+    stem = bag[:-len('.bag')]
+    pieces = [out / f'{stem}_c1.bag', out / f'{stem}_c2.bag']
+
+    def counts(path):
+        with Reader(path) as reader:
+            return [t for _, t, _ in reader.messages()]
+    whole = counts(recordings['bags'] / bag)
+    first, second = counts(pieces[0]), counts(pieces[1])
+    assert first + second == whole
+    assert max(first) < (onset - 1.5) * 1e9 <= min(second)
+    assert (out / 'labels.csv').read_text().splitlines()[1:] == [
+        f'{stem}_c1.bag,{onset - 3.0:.6f},{onset - 3.0:.6f}',
+        f'{stem}_c2.bag,{onset:.6f},{onset:.6f}']
