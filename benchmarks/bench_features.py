@@ -1,4 +1,19 @@
-"""Feature-core cost per audio frame and real-time factor (one core).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Feature-core cost per audio frame and real-time factor (one core).
 
 Streams a synthetic recording through StreamingFeatureExtractor the way the node receives it
 (audio in 10 ms chunks, one wrench sample per message) and the way offline tools do (1 s
@@ -11,10 +26,9 @@ import argparse
 import statistics
 import time
 
-import numpy as np
-
 from contact_detector.cli.features import synthetic_recording
 from contact_detector.features import FeatureConfig, StreamingFeatureExtractor
+import numpy as np
 
 
 def run_once(*, config, recording, audio_rate, ft_rate, audio_chunk, ft_chunk):

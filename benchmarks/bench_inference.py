@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Inference speed of the contact forest: CompiledForest vs scikit-learn, and model load times.
 
@@ -26,9 +40,6 @@ import tempfile
 import time
 from typing import Callable, List, Optional, Sequence
 
-import numpy as np
-from sklearn.ensemble import RandomForestClassifier
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from contact_detector.features.config import (  # noqa: E402
@@ -36,6 +47,8 @@ from contact_detector.features.config import (  # noqa: E402
 from contact_detector.model import (  # noqa: E402
     CompiledForest, load_bundle, ModelBundle, runtime_versions, save_bundle)
 from contact_detector.model.compiled_forest import check_same_as_sklearn  # noqa: E402
+import numpy as np  # noqa: E402
+from sklearn.ensemble import RandomForestClassifier  # noqa: E402
 
 
 def synthetic_frames(*, n: int, n_features: int, seed: int) -> tuple:

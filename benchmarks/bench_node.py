@@ -1,4 +1,19 @@
-"""Latency and CPU share of the live node at 16 kHz / 44.1 kHz audio with 100 Hz F/T and 1 kHz.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Latency and CPU share of the live node at 16 kHz / 44.1 kHz audio with 100 Hz F/T and 1 kHz.
 
 Two measurements per input configuration (10 ms audio chunks, one wrench sample per message,
 the simulated trial of test/test_e2e_node.py), medians over the repeats:

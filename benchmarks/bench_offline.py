@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Offline tools: real-time factor of ``detect``, and the forest against the baselines.
 
@@ -36,8 +50,6 @@ import tempfile
 import time
 from typing import List, Optional, Sequence
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from contact_detector.cli import detect as detect_cli  # noqa: E402
@@ -50,6 +62,7 @@ from contact_detector.model.bundle import default_model_path  # noqa: E402
 from contact_detector.sim.bag_writer import (manifest_entry, write_manifest,  # noqa: E402
                                              write_trial_bag)
 from contact_detector.sim.trial import simulate_trials  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def emit(*lines: str) -> None:

@@ -1,4 +1,19 @@
-"""CPU floor of a Python rclpy process that only receives the node's two sensor inputs.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+CPU floor of a Python rclpy process that only receives the node's two sensor inputs.
 
 A publisher process sends what the node subscribes to: ``geometry_msgs/WrenchStamped`` at
 100 Hz and ``std_msgs/Int16MultiArray`` with 441-sample chunks (10 ms of 44.1 kHz audio) at

@@ -1,4 +1,19 @@
-"""Soak: many simulated minutes of input through the node's processing at full speed; memory.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Soak: many simulated minutes of input through the node's processing at full speed; memory.
 
 Simulated trials (``--pool`` of them, all condition sets in turn: paper, heavy, soft, noisy,
 gain, odd_chunking; random exogenous hits; simulated before the measurement starts) are played
@@ -37,8 +52,6 @@ import time
 import tracemalloc
 from typing import Callable, Iterator, List, Optional
 
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / 'test'))
@@ -47,6 +60,7 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.model.bundle import load_bundle, ModelBundle  # noqa: E402
 from contact_detector.sim.conditions import ALIASES  # noqa: E402
 from contact_detector.sim.trial import simulate_trial  # noqa: E402
+import numpy as np  # noqa: E402
 
 PAGE = os.sysconf('SC_PAGE_SIZE')
 MB = 1024.0 * 1024.0

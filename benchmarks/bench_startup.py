@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Start-up cost of the node and of ``detect``: import, shipped-model load, detector build.
 
@@ -28,7 +42,7 @@ REPO = Path(__file__).resolve().parents[1]
 TARGETS = {'node': 'contact_detector.ros.node', 'detect': 'contact_detector.cli.detect'}
 WATCHED = ('sklearn', 'joblib', 'rosbags', 'matplotlib')
 
-_CHILD = '''
+_CHILD = """
 import json, sys, time
 t0 = time.perf_counter()
 import {module}  # noqa: F401
@@ -40,7 +54,7 @@ bundle.compile()
 t3 = time.perf_counter()
 print(json.dumps({{'import_s': t1 - t0, 'load_s': t2 - t1, 'compile_s': t3 - t2,
                   'imported': [m for m in {watched!r} if m in sys.modules]}}))
-'''
+"""
 
 
 def run_once(*, module: str, model: Optional[str]) -> dict:

@@ -1,4 +1,19 @@
-"""Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+r"""
+Compare extra-feature sets, F/T change windows and release rules over several forest seeds.
 
 A 10-tree forest is a noisy estimator: the same recipe trained with another random seed moves
 the count of premature releases on 360 held-out trials by several, so one trained forest cannot
@@ -26,15 +41,13 @@ noisy and gain, train on the other condition sets of the training folder and the
 held-out folder, and test on that condition's trials of the *other* held-out folders; round 4's
 features against the shipped ones, slow path at 0.5 and 0.3.
 
-    python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \\
+    python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
 """
 
 import argparse
 from dataclasses import replace
 from typing import Dict, List
-
-import numpy as np
 
 from contact_detector.cli.sweep import decode
 from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS
@@ -44,6 +57,7 @@ from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_forest,
                                           score_rules)
+import numpy as np
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
@@ -78,7 +92,7 @@ def feature_settings() -> List[FeatureSetting]:
 
 
 def feature_rules() -> List[DecisionRule]:
-    """The round-1 default, the shipped rule and its faster and stricter neighbours."""
+    """Return the round-1 default, the shipped rule and its faster and stricter neighbours."""
     slow = {'sustain_frames': 15, 'sustain_threshold': 0.5}
     return [DecisionRule(threshold=0.7, confirm_frames=2),
             DecisionRule(threshold=0.85, **slow),
@@ -87,7 +101,7 @@ def feature_rules() -> List[DecisionRule]:
 
 
 def sustain_rules() -> List[DecisionRule]:
-    """The slow path (quiet contacts) with lower thresholds and a longer mean."""
+    """Return the slow path (quiet contacts) with lower thresholds and a longer mean."""
     return [replace(ROUND2_RULE, sustain_threshold=0.5),
             replace(ROUND2_RULE, sustain_threshold=0.4),
             replace(ROUND2_RULE, sustain_threshold=0.3),

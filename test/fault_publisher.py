@@ -1,4 +1,19 @@
-"""Trial publisher with injected faults, for test_faults_e2e.py (its own process).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Trial publisher with injected faults, for test_faults_e2e.py (its own process).
 
 Plays simulated trial ``--seed/--index/--hits`` from its start on ``wrist_wrench``
 (geometry_msgs/WrenchStamped, one sample per message) and ``audio`` (std_msgs/Int16MultiArray,

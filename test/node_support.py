@@ -1,4 +1,19 @@
-"""Shared helpers of the node tests: a small test model and simulated-trial message streams.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Shared helpers of the node tests: a small test model and simulated-trial message streams.
 
 Used by test_node.py, test_e2e_node.py, e2e_publisher.py and benchmarks/bench_node.py. The
 model is the shipped ``models/contact_forest.npz`` when it exists, otherwise a small forest
@@ -14,11 +29,10 @@ import subprocess
 import sys
 from typing import List, Optional
 
-import numpy as np
-
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.sim.trial import simulate_trial, Trial
+import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 SHIPPED_MODEL = REPO / 'models' / 'contact_forest.npz'
@@ -26,7 +40,7 @@ SHIPPED_MODEL = REPO / 'models' / 'contact_forest.npz'
 TRAIN_SEED = 7
 TRAIN_TRIALS = 12
 LABEL_WINDOW_S = 0.1
-TEST_RULE = dict(threshold=0.5, confirm_frames=2, refractory_s=1.0)
+TEST_RULE = {'threshold': 0.5, 'confirm_frames': 2, 'refractory_s': 1.0}
 
 _cache: dict = {}
 

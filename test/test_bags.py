@@ -1,13 +1,22 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Tests of the shared bag helpers in contact_detector.io.bags."""
 
 import json
 from pathlib import Path
 import sqlite3
-
-import numpy as np
-import pytest
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 from contact_detector.errors import BagError
 from contact_detector.io.bags import (find_bags, iter_messages, jazzy_typestore, manifest_entry,
@@ -16,6 +25,10 @@ from contact_detector.io.bags import (find_bags, iter_messages, jazzy_typestore,
 from contact_detector.sim.bag_writer import (int16_multiarray_cdr, wrench_cdr, write_manifest,
                                              write_trial_bag)
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 AUDIO_DATA = 'audio_common_msgs/msg/AudioData'
 

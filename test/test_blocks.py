@@ -1,4 +1,19 @@
-"""Offline decisions in blocks are the node's decisions, to the bit.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Offline decisions in blocks are the node's decisions, to the bit.
 
 ``detect``, ``evaluate`` and the benchmarks run a clean recording through
 :mod:`contact_detector.detection.blocks`; anything unusual goes message by message, as the node
@@ -7,9 +22,6 @@ storages, and on recordings damaged the ways the reliability page lists.
 """
 
 from dataclasses import replace
-
-import numpy as np
-import pytest
 
 from contact_detector.detection.blocks import run_blocks
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
@@ -21,6 +33,8 @@ from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events
 from contact_detector.model.bundle import default_model_path, load_bundle
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')
@@ -96,10 +110,10 @@ def test_noise_floor_does_not_depend_on_grouping(bundle):
 # --- recordings: blocks and message by message agree ----------------------------------------
 
 CASES = {
-    '16k_sqlite': dict(audio_rate=16000, storage='sqlite3'),
-    '44k1_mcap': dict(audio_rate=44100, storage='mcap'),
-    'odd_chunks_48k': dict(audio_rate=48000, condition='odd_chunking'),
-    '1kHz_ft': dict(ft_rate=1000.0, wrench_rate=1000.0),
+    '16k_sqlite': {'audio_rate': 16000, 'storage': 'sqlite3'},
+    '44k1_mcap': {'audio_rate': 44100, 'storage': 'mcap'},
+    'odd_chunks_48k': {'audio_rate': 48000, 'condition': 'odd_chunking'},
+    '1kHz_ft': {'ft_rate': 1000.0, 'wrench_rate': 1000.0},
 }
 
 
@@ -119,7 +133,7 @@ def recordings(tmp_path_factory):
                                    ft_rate=case.get('ft_rate', 100.0))
             bags.append(write_trial_bag(trial=trial, path=root / name / trial.name,
                                         storage=storage))
-        settings = dict(audio_rate=float(case.get('audio_rate', 16000)), wrench_rate=wrench_rate)
+        settings = {'audio_rate': float(case.get('audio_rate', 16000)), 'wrench_rate': wrench_rate}
         out[name] = ([load_events(b, spec=StreamSpec()) for b in bags], settings)
     return out
 
@@ -202,7 +216,7 @@ def test_cdr_readers_and_rosbags_give_the_same_run(bundle, tmp_path):
         slow = load_events(path)
     finally:
         sensor_stream.FAST_DECODERS.update(saved)
-    settings = dict(audio_rate=44100.0)
+    settings = {'audio_rate': 44100.0}
     _same(run_detector(fast, detector=_detector(bundle, **settings)),
           run_detector(slow, detector=_detector(bundle, **settings), in_blocks=False))
 

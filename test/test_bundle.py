@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Model bundle: save/load round trips, the model card, and every refusal of load_bundle."""
 
 import hashlib
@@ -6,18 +20,17 @@ from pathlib import Path
 import pickle
 from typing import Callable
 
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.model import (DecisionRule, default_model_path, load_bundle, ModelBundle,
+                                    runtime_versions, save_bundle)
+from contact_detector.model.bundle import card_paths, find_model, JOBLIB_PROTOCOL
 import joblib
 import numpy as np
 import pytest
 import sklearn
 from sklearn.ensemble import RandomForestClassifier
 from sklearn.preprocessing import StandardScaler
-
-from contact_detector.errors import ConfigError, ModelError
-from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
-from contact_detector.model import (DecisionRule, default_model_path, load_bundle, ModelBundle,
-                                    runtime_versions, save_bundle)
-from contact_detector.model.bundle import card_paths, find_model, JOBLIB_PROTOCOL
 
 CONFIG = FeatureConfig(extra_features=('force_delta',))
 
@@ -38,15 +51,17 @@ def forest() -> RandomForestClassifier:
 
 
 def _bundle(forest: RandomForestClassifier, **overrides: object) -> ModelBundle:
-    fields = dict(forest=forest, feature_config=CONFIG, feature_names=CONFIG.feature_names,
-                  feature_schema_version=FEATURE_SCHEMA_VERSION,
-                  label_window={'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
-                  decision_rule=DecisionRule(threshold=0.6, confirm_frames=2, refractory_s=0.5),
-                  versions=runtime_versions(),
-                  training={'n_frames': 1500, 'trials': ('a', 'b'), 'n_estimators_auc':
-                            {str(n): 0.9 + n / 100 for n in range(1, 5)}},
-                  metrics={'roc_auc': np.float64(0.97), 'undefined': float('nan')},
-                  created='2026-03-01T12:00:00+00:00')
+    fields = {
+        'forest': forest, 'feature_config': CONFIG, 'feature_names': CONFIG.feature_names,
+        'feature_schema_version': FEATURE_SCHEMA_VERSION,
+        'label_window': {'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
+        'decision_rule': DecisionRule(threshold=0.6, confirm_frames=2, refractory_s=0.5),
+        'versions': runtime_versions(),
+        'training': {'n_frames': 1500, 'trials': ('a', 'b'), 'n_estimators_auc':
+                     {str(n): 0.9 + n / 100 for n in range(1, 5)}},
+        'metrics': {'roc_auc': np.float64(0.97), 'undefined': float('nan')},
+        'created': '2026-03-01T12:00:00+00:00',
+    }
     fields.update(overrides)
     return ModelBundle(**fields)
 
@@ -129,6 +144,7 @@ def test_tampered_file_is_refused_before_unpickling(saved: Path, tmp_path: Path)
     marker = tmp_path / 'pwned'
 
     class Exploit:
+
         def __reduce__(self) -> tuple:
             return (open, (str(marker), 'w'))
 

@@ -1,11 +1,24 @@
-"""The CDR readers behind offline decoding give rosbags' values, and step aside when unsure."""
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-import numpy as np
-import pytest
+"""The CDR readers behind offline decoding give rosbags' values, and step aside when unsure."""
 
 from contact_detector.io import cdr
 from contact_detector.io.bags import jazzy_typestore
 from contact_detector.io.messages import audio_to_samples, stamp_to_seconds, wrench_to_arrays
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

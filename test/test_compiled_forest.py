@@ -1,12 +1,25 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """CompiledForest reproduces RandomForestClassifier.predict_proba bit for bit."""
 
+from contact_detector.errors import InputError, ModelError
+from contact_detector.model.compiled_forest import check_same_as_sklearn, CompiledForest
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier, RandomForestRegressor
-
-from contact_detector.errors import InputError, ModelError
-from contact_detector.model.compiled_forest import check_same_as_sklearn, CompiledForest
 
 N_FEATURES = 7
 

@@ -1,13 +1,21 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """ROS 1 bags and stream discovery: the offline commands read a user's bags without flags."""
 
 import json
 from pathlib import Path
-
-import numpy as np
-import pytest
-from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.errors import BagError
@@ -16,6 +24,11 @@ from contact_detector.io.discovery import discover_streams, snap_audio_rate
 from contact_detector.io.sensor_stream import AudioEvent, load_events, StreamSpec, WrenchEvent
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
+from rosbags.rosbag1 import Writer as Ros1Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 WS = 'geometry_msgs/msg/WrenchStamped'
 I16 = 'std_msgs/msg/Int16MultiArray'
@@ -38,7 +51,7 @@ MGONZS13_MSGS = {
 
 
 def store_with(kind: str, msgs: dict):
-    """A rosbags typestore (ROS 1 Noetic or ROS 2 Jazzy) with extra message definitions."""
+    """Return a rosbags typestore (ROS 1 Noetic or ROS 2 Jazzy) with extra definitions."""
     store = get_typestore(Stores.ROS1_NOETIC if kind == 'ros1' else Stores.ROS2_JAZZY)
     for name, text in msgs.items():
         store.register(get_types_from_msg(text, name))
@@ -46,10 +59,10 @@ def store_with(kind: str, msgs: dict):
 
 
 def wrench_msg(store, t_ns: int, fz: float):
-    """A WrenchStamped in ``store``'s layout (ROS 1 headers have ``seq``)."""
+    """Return a WrenchStamped in ``store``'s layout (ROS 1 headers have ``seq``)."""
     types = store.types
     time = types['builtin_interfaces/msg/Time']
-    header = dict(stamp=time(sec=t_ns // 10**9, nanosec=t_ns % 10**9), frame_id='ft')
+    header = {'stamp': time(sec=t_ns // 10**9, nanosec=t_ns % 10**9), 'frame_id': 'ft'}
     if 'seq' in types['std_msgs/msg/Header'].__dataclass_fields__:
         header['seq'] = 0
     vec = types['geometry_msgs/msg/Vector3']

@@ -1,4 +1,19 @@
-"""Three processes over DDS (loopback): trial publisher at the real rate, the node, a listener.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Three processes over DDS (loopback): trial publisher at the real rate, the node, a listener.
 
 The publisher plays a simulated trial with in-air hand hits before the contact, its times
 shifted to the wall clock; the node runs as ``python -m contact_detector.ros.node`` with its
@@ -12,9 +27,8 @@ import json
 from pathlib import Path
 import time
 
-import pytest
-
 import node_support
+import pytest
 
 pytestmark = pytest.mark.rclpy
 

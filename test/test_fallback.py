@@ -1,15 +1,28 @@
-"""AudioFallback: the F/T-only model stands in while the audio is silent (shipped models)."""
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-import numpy as np
-import pytest
+"""AudioFallback: the F/T-only model stands in while the audio is silent (shipped models)."""
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback, FT_ONLY, MULTIMODAL
 from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
 
-TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
 
 
 @pytest.fixture(scope='module')

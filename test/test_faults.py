@@ -1,4 +1,19 @@
-"""Every input fault of docs/reliability.md against the real node, in-process, one case each.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Every input fault of docs/reliability.md against the real node, in-process, one case each.
 
 The node (:class:`ContactDetectorNode` with a test model) gets real rclpy messages through its
 own subscription callbacks, its clock set to each message's receive time first (``use_sim_time``
@@ -19,8 +34,11 @@ import re
 from typing import Callable, Optional
 
 from builtin_interfaces.msg import Time as TimeMsg
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.sim.trial import simulate_trial
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+import node_support
 import numpy as np
 import pytest
 import rclpy
@@ -29,13 +47,9 @@ from rclpy.parameter import Parameter
 from rclpy.time import Time
 from std_msgs.msg import Float32MultiArray, Int16MultiArray
 
-from contact_detector.ros.node import ContactDetectorNode
-from contact_detector.sim.trial import simulate_trial
-import node_support
-
 pytestmark = pytest.mark.rclpy
 
-TRIAL = dict(seed=3, index=21, hits='hand')
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}
 LATENCY_BUDGET_S = 0.3
 DIAG_PERIOD_S = 0.5
 

@@ -1,4 +1,19 @@
-"""Fault injection against the live node in its own process, over DDS (loopback).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Fault injection against the live node in its own process, over DDS (loopback).
 
 Processes: the node (``python -m contact_detector.ros.node``, default parameters: best-effort
 sensor-data QoS of depth 10, audio stamped on receipt, wrench by its header), and two trial
@@ -27,16 +42,15 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+import node_support
 import pytest
+from rcl_interfaces.srv import SetParameters
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rcl_interfaces.srv import SetParameters
 from std_msgs.msg import Bool
-
-import node_support
 
 pytestmark = pytest.mark.rclpy
 

@@ -1,10 +1,20 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Feature core on synthetic signals: known answers, streaming == batch, causality, bad input."""
 
 from dataclasses import replace
-
-from hypothesis import given, settings, strategies as st
-import numpy as np
-import pytest
 
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFeatureExtractor,
@@ -13,6 +23,9 @@ from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
 from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.features.streaming import ForceTorqueStream
+from hypothesis import given, settings, strategies as st
+import numpy as np
+import pytest
 
 T0 = 1_700_000_000.0
 

@@ -1,14 +1,25 @@
-"""F/T-only models (robots without a microphone): the core, on synthetic signals.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+F/T-only models (robots without a microphone): the core, on synthetic signals.
 
 Frames are clocked by the F/T feature stream; the release logic, warm-up, staleness, hold-off,
 gap restarts and time jumps are those of the multimodal path; audio is ignored, never an error.
 """
 
 from typing import Optional
-
-import numpy as np
-import pytest
-from sklearn.ensemble import RandomForestClassifier
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector, run_features
@@ -19,6 +30,9 @@ from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureCon
 from contact_detector.features.streaming import ForceTorqueStream, StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, WrenchEvent
 from contact_detector.model.bundle import DecisionRule, ModelBundle, runtime_versions
+import numpy as np
+import pytest
+from sklearn.ensemble import RandomForestClassifier
 
 CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
                        extra_features=SHIFT_FEATURES)

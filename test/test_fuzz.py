@@ -1,4 +1,19 @@
-"""Hypothesis fuzzing of the detector core and of every message adapter.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Hypothesis fuzzing of the detector core and of every message adapter.
 
 What is asserted
 ----------------
@@ -28,11 +43,6 @@ from datetime import datetime
 import os
 from types import SimpleNamespace as NS
 
-from hypothesis import given, HealthCheck, settings, strategies as st
-import numpy as np
-import pytest
-from sklearn.ensemble import RandomForestClassifier
-
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
@@ -42,6 +52,10 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to
                                           wrench_to_arrays)
 from contact_detector.model.bundle import (DecisionRule, load_bundle, ModelBundle,
                                            runtime_versions, save_bundle)
+from hypothesis import given, HealthCheck, settings, strategies as st
+import numpy as np
+import pytest
+from sklearn.ensemble import RandomForestClassifier
 
 RATE = 16000
 FT_RATE = 100.0
@@ -65,7 +79,7 @@ ALLOWED = (InputError, ConfigError)
 
 @pytest.fixture(scope='module')
 def bundle(tmp_path_factory):
-    """A real (tiny) forest on random features, saved and loaded through model/bundle.py."""
+    """Return a real (tiny) forest on random features, saved and loaded through model/bundle.py."""
     config = FeatureConfig()
     rng = np.random.default_rng(0)
     x = rng.normal(0.0, 1.0, (400, config.n_features))
@@ -106,7 +120,7 @@ def good_audio(rng: np.random.Generator) -> np.ndarray:
 def good_wrench(rng: np.random.Generator, t: float) -> dict:
     force = np.array([[6.0, 0.2, 0.1]]) + rng.normal(0.0, 0.05, (1, 3))
     torque = np.array([[0.1, 0.9, 0.0]]) + rng.normal(0.0, 0.01, (1, 3))
-    return dict(t=np.array([t]), force=force, torque=torque)
+    return {'t': np.array([t]), 'force': force, 'torque': torque}
 
 
 def feed_good(det: ContactDetector, rng: np.random.Generator, *, t0: float,
@@ -225,7 +239,7 @@ def build_wrench(op, clock: float) -> dict:
                'text': ['a'] * n, 'bigint': [10 ** 400] * max(n, 1)}[t_shape]
     force = make_array(dtype=dtype, shape=f_shape, fill=fill, seed=seed)
     torque = make_array(dtype=dtype, shape=f_shape, fill='noise', seed=seed + 1)
-    return dict(t=t_value, force=force, torque=torque)
+    return {'t': t_value, 'force': force, 'torque': torque}
 
 
 @st.composite
@@ -340,7 +354,7 @@ def build_corrupt_wrench(op, *, now: float, last_t, max_delay: float) -> dict:
     elif how == 'repeat' and last_t is not None:
         t = np.array([last_t - 0.2 * rng.random()])
         force, torque = force[:1], torque[:1]
-    return dict(t=t, force=force, torque=torque)
+    return {'t': t, 'force': force, 'torque': torque}
 
 
 @st.composite
@@ -479,7 +493,7 @@ def junk():
 
 
 def field(plausible):
-    """A field's value: usually plausible, sometimes junk, sometimes missing."""
+    """Return a field's value: usually plausible, sometimes junk, sometimes missing."""
     return st.one_of(plausible, plausible, junk(), st.just(MISSING))
 
 

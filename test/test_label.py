@@ -1,10 +1,21 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """``contact-detector label``: hindsight onsets on simulated bags, unlabelled rows, train."""
 
 import csv
 import dataclasses
-
-import numpy as np
-import pytest
 
 from contact_detector.cli import label as label_cli
 from contact_detector.cli import train as train_cli
@@ -14,6 +25,8 @@ from contact_detector.model.bundle import load_bundle
 from contact_detector.model.training import read_labels_csv
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
 
 #: (condition, index, storage): different families, a soft and a quiet contact, a ROS 1 bag.
 TRIALS = [('paper', 0, 'sqlite3'), ('soft', 1, 'sqlite3'), ('compliant', 2, 'ros1'),

@@ -1,16 +1,28 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Message -> array adapters on duck-typed, rclpy and rosbags-deserialised messages."""
 
 from types import SimpleNamespace as NS
 
+from contact_detector.errors import ConfigError, InputError
+from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
+                                          AudioFormat, check_audio_info, embedded_audio_format,
+                                          normalise_msg_type, stamp_to_seconds, wrench_to_arrays)
 import numpy as np
 import pytest
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
-
-from contact_detector.errors import ConfigError, InputError
-from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, audio_stamp,
-                                          audio_to_samples, check_audio_info,
-                                          embedded_audio_format, normalise_msg_type,
-                                          stamp_to_seconds, wrench_to_arrays)
 
 I16 = 'std_msgs/msg/Int16MultiArray'
 F32 = 'std_msgs/msg/Float32MultiArray'

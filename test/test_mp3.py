@@ -1,11 +1,21 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """mp3 audio in bags (audio_common's default): decoded offline with its sample times right."""
 
 import io
 from types import SimpleNamespace as NS
-
-import numpy as np
-import pytest
-import soundfile
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.errors import ConfigError
@@ -13,6 +23,9 @@ from contact_detector.io.discovery import discover_streams
 from contact_detector.io.messages import check_audio_info
 from contact_detector.io.mp3 import LAME_DELAY, mp3_format, mp3_frames
 from contact_detector.io.sensor_stream import AudioEvent, load_events, WrenchEvent
+import numpy as np
+import pytest
+import soundfile
 from test_discovery import AD, AI, ROS_DRIVERS_MSGS, store_with, wrench_series, write_bag
 
 T_START_NS = 1_700_000_000 * 10**9
@@ -20,7 +33,7 @@ CLICK_S = 1.0
 
 
 def mp3_stream(rate: int, *, seconds: float = 2.0, tagged: bool = True) -> bytes:
-    """An mp3 (soundfile / LAME) of silence with one click ``CLICK_S`` after the start."""
+    """Encode an mp3 (soundfile / LAME) of silence with a click ``CLICK_S`` after the start."""
     x = np.zeros(int(seconds * rate), np.float32)
     x[int(CLICK_S * rate)] = 0.9
     buf = io.BytesIO()

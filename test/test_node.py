@@ -1,4 +1,19 @@
-"""The live node in-process, with real rclpy: topics, services, parameters, bad input, time.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The live node in-process, with real rclpy: topics, services, parameters, bad input, time.
 
 Every test gets its own rclpy context. Messages go through DDS (loopback, see conftest.py);
 time is simulated (``use_sim_time``, the test publishes ``/clock`` like ``ros2 bag play
@@ -15,8 +30,16 @@ import sys
 import time
 
 from builtin_interfaces.msg import Time
+from contact_detector.detection.detector import ContactDetector
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.model.bundle import load_bundle
+from contact_detector.ros.executor import HotPathExecutor
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.ros.params import PARAMS
+from contact_detector.sim.trial import simulate_trial
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+import node_support
 import numpy as np
 import pytest
 import rclpy
@@ -30,19 +53,10 @@ from std_msgs.msg import Bool, Float32, Float32MultiArray, Int16MultiArray
 from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from contact_detector.detection.detector import ContactDetector
-from contact_detector.errors import ConfigError, ModelError
-from contact_detector.model.bundle import load_bundle
-from contact_detector.ros.executor import HotPathExecutor
-from contact_detector.ros.node import ContactDetectorNode
-from contact_detector.ros.params import PARAMS
-from contact_detector.sim.trial import simulate_trial
-import node_support
-
 pytestmark = pytest.mark.rclpy
 
 TICK_S = 0.01              # /clock period of the simulated bag player
-TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
 
 
 @pytest.fixture(scope='module')
@@ -199,7 +213,7 @@ def harness_factory(context, model):
 
 
 def offline_run(model, trial, fed, **settings):
-    """The same arrays and stamps through ContactDetector directly (no ROS)."""
+    """Run the same arrays and stamps through ContactDetector directly (no ROS)."""
     bundle = load_bundle(path=model)
     from contact_detector.detection.detector import DetectorSettings
     det = ContactDetector(bundle=bundle, settings=DetectorSettings(
@@ -252,7 +266,7 @@ def test_trial_frames_and_single_release(harness_factory, model, trial):
 @pytest.mark.parametrize('executor', ['single', 'hot_path'])
 def test_arm_and_reset_services(harness_factory, trial, executor):
     h = harness_factory(executor=executor, **{'release.armed_on_start': False})
-    span = dict(t_from=trial.onset_t - 1.5, t_to=trial.onset_t + 0.5)
+    span = {'t_from': trial.onset_t - 1.5, 't_to': trial.onset_t + 0.5}
     h.feed(trial, node_support.trial_events(trial, **span))
     h.flush_outputs()
     counts = h.node.detector_counts()
@@ -548,7 +562,7 @@ def test_float32_audio_with_nan_is_dropped(harness_factory, trial):
 
 
 def big_endian_wrench(t: float, values) -> bytes:
-    """A WrenchStamped in big-endian CDR (what io.cdr does not read; rclpy does)."""
+    """Return a WrenchStamped in big-endian CDR (what io.cdr does not read; rclpy does)."""
     frame = b'wrist_ft_sensor_frame\x00'
     head = struct.pack('>iII', stamp(t).sec, stamp(t).nanosec, len(frame)) + frame
     return b'\x00\x00\x00\x00' + head + bytes(-len(head) % 8) + struct.pack('>6d', *values)

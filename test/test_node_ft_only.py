@@ -1,4 +1,19 @@
-"""The live node with an F/T-only model (a robot without a microphone), with real rclpy.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The live node with an F/T-only model (a robot without a microphone), with real rclpy.
 
 No audio subscription; one frame per F/T feature frame, equal to :class:`ContactDetector`
 run offline on the same stamps; one release at the contact; audio.enabled false loads the
@@ -8,8 +23,14 @@ shipped F/T-only model and refuses a model that needs audio.
 import time
 
 from builtin_interfaces.msg import Time
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.errors import ConfigError
+from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.sim.trial import simulate_trial
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
+import node_support
 import numpy as np
 import pytest
 import rclpy
@@ -20,17 +41,10 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool, Float32, Int16MultiArray
 
-from contact_detector.detection.detector import ContactDetector, DetectorSettings
-from contact_detector.errors import ConfigError
-from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
-from contact_detector.ros.node import ContactDetectorNode
-from contact_detector.sim.trial import simulate_trial
-import node_support
-
 pytestmark = pytest.mark.rclpy
 
 TICK_S = 0.01
-TRIAL = dict(seed=3, index=21, hits='hand')     # in-air hand hits 1.5 s and 1.1 s before onset
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
 
 
 @pytest.fixture

@@ -1,4 +1,19 @@
-"""The npz model format: round trip, the save-time check, the loader's refusals and fuzzing.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The npz model format: round trip, the save-time check, the loader's refusals and fuzzing.
 
 The npz file is the shipped model format: it loads with numpy alone (no scikit-learn, no
 pickle). Every corrupted file or card must give a ModelError naming the problem: never another
@@ -14,10 +29,6 @@ import sys
 from typing import Callable, Dict
 import zipfile
 
-import numpy as np
-import pytest
-from sklearn.ensemble import RandomForestClassifier
-
 from contact_detector.cli import convert_model
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.evaluation.metrics import frame_report
@@ -26,6 +37,9 @@ from contact_detector.model.bundle import (card_paths, DecisionRule, default_mod
                                            load_bundle, ModelBundle, runtime_versions,
                                            save_bundle)
 from contact_detector.model.forest_arrays import ForestArrays, NPZ_MEMBERS
+import numpy as np
+import pytest
+from sklearn.ensemble import RandomForestClassifier
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = FeatureConfig(extra_features=('force_delta',))
@@ -46,12 +60,12 @@ def fitted() -> tuple:
 
 
 def _bundle(forest, **overrides) -> ModelBundle:
-    fields = dict(forest=forest, feature_config=CONFIG, feature_names=CONFIG.feature_names,
-                  feature_schema_version=FEATURE_SCHEMA_VERSION,
-                  label_window={'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
-                  decision_rule=DecisionRule(threshold=0.6, confirm_frames=2),
-                  versions=runtime_versions(), training={'frames': 1500},
-                  metrics={'auc': 0.9}, created='2026-03-01T12:00:00+00:00')
+    fields = {'forest': forest, 'feature_config': CONFIG, 'feature_names': CONFIG.feature_names,
+              'feature_schema_version': FEATURE_SCHEMA_VERSION,
+              'label_window': {'mode': 'onset', 'start_s': 0.0, 'end_s': 0.1},
+              'decision_rule': DecisionRule(threshold=0.6, confirm_frames=2),
+              'versions': runtime_versions(), 'training': {'frames': 1500},
+              'metrics': {'auc': 0.9}, 'created': '2026-03-01T12:00:00+00:00'}
     fields.update(overrides)
     return ModelBundle(**fields)
 
@@ -395,7 +409,7 @@ def test_forest_arrays_validate_at_construction(saved: Path) -> None:
 def test_shipped_model_is_npz_and_loads_without_sklearn_joblib_rosbags_matplotlib(
         tmp_path: Path) -> None:
     """Node import, model load and one live-path detection with those packages made absent."""
-    code = f'''
+    code = f"""
 import sys
 for name in ('sklearn', 'joblib', 'skops', 'rosbags', 'matplotlib'):
     sys.modules[name] = None   # any import of them now fails
@@ -421,7 +435,7 @@ for e in node_support.trial_events(trial):
         detector.on_wrench(t=trial.wrench_t[e.lo:e.hi], force=trial.force[e.lo:e.hi],
                            torque=trial.torque[e.lo:e.hi])
 print(len(releases), releases[0] - trial.onset_t if releases else None)
-'''
+"""
     done = subprocess.run([sys.executable, '-c', code], cwd=REPO, capture_output=True,
                           text=True, timeout=180)
     assert done.returncode == 0, done.stderr

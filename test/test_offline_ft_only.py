@@ -1,4 +1,19 @@
-"""detect, evaluate and train on recordings without a microphone (no audio topic at all).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+detect, evaluate and train on recordings without a microphone (no audio topic at all).
 
 Bags are written in tmp_path from simulated trials with ``write_trial_bag(audio=False)``. Without
 ``--model`` the tools pick the shipped F/T-only model for such a recording and say so.
@@ -7,13 +22,12 @@ Bags are written in tmp_path from simulated trials with ``write_trial_bag(audio=
 import json
 from pathlib import Path
 
-import pytest
-
 from contact_detector.cli import main as cli_main
 from contact_detector.io.bags import topic_types
 from contact_detector.model.bundle import default_ft_model_path, load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+import pytest
 
 N_TRIALS = 8
 

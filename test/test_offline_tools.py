@@ -1,4 +1,19 @@
-"""The offline tools on simulated bags: detect (the JSONL contract), evaluate, train, baselines.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The offline tools on simulated bags: detect (the JSONL contract), evaluate, train, baselines.
 
 A module fixture simulates eight short trials (every condition set) into sqlite3 bags and trains
 a small model on them with ``contact-detector train``, so nothing here depends on the shipped
@@ -12,12 +27,6 @@ import os
 from pathlib import Path
 import subprocess
 import sys
-
-import numpy as np
-import pytest
-from rosbags.highlevel import AnyReader
-from rosbags.rosbag2 import Writer
-from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.cli import main as cli_main
@@ -33,6 +42,11 @@ from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events
 from contact_detector.model.bundle import load_bundle
 from contact_detector.sim import simulate_trial, simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import Writer
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 SEED = 11
 N_TRIALS = 8

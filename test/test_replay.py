@@ -1,4 +1,19 @@
-"""``contact-detector replay`` into a live graph: real rclpy, DDS on loopback (conftest.py).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector replay`` into a live graph: real rclpy, DDS on loopback (conftest.py).
 
 The replay runs as its own process, as a user would start it; this process subscribes to what
 it publishes. ``--wait-for-subscribers`` holds the start until our subscriptions have matched
@@ -11,6 +26,9 @@ import subprocess
 import sys
 import time
 
+from contact_detector.io.bags import iter_messages, jazzy_typestore
+from contact_detector.sim import simulate_trial
+from contact_detector.sim.bag_writer import write_trial_bag
 import numpy as np
 import pytest
 import rclpy
@@ -19,10 +37,6 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import Writer
-
-from contact_detector.io.bags import iter_messages, jazzy_typestore
-from contact_detector.sim import simulate_trial
-from contact_detector.sim.bag_writer import write_trial_bag
 
 pytestmark = pytest.mark.rclpy
 
@@ -39,7 +53,7 @@ def _replay_command(*args) -> list:
 
 @pytest.fixture(scope='module')
 def bag(tmp_path_factory) -> Path:
-    """The first SPAN_S seconds of a simulated trial (wrench and audio, no truth yet)."""
+    """Return the first SPAN_S seconds of a simulated trial (wrench and audio, no truth yet)."""
     root = tmp_path_factory.mktemp('replay')
     full = write_trial_bag(trial=simulate_trial(seed=5, index=0), path=root / 'full')
     short = root / 'short'

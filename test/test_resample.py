@@ -1,9 +1,20 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Any F/T rate from 50 Hz to 10 kHz: resampling onto the feature grid, offline and streaming."""
 
 import dataclasses
-
-import numpy as np
-import pytest
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.errors import ConfigError
@@ -13,6 +24,8 @@ from contact_detector.features.streaming import ForceTorqueStream
 from contact_detector.io.discovery import discover_streams
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
 
 RATES = [50.0, 51.0, 100.0, 125.0, 200.0, 333.0, 500.0, 1000.0, 10000.0]
 T0 = 1_700_000_000.0

@@ -1,26 +1,39 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Tests of the simulator: determinism, truth, stop rule, phases, bags, hits, condition sets."""
 
 import json
 import os
-import shutil
 from pathlib import Path
-
-import numpy as np
-import pytest
-from rosbags.highlevel import AnyReader
+import shutil
 
 from contact_detector.cli.plot import main as plot_main
 from contact_detector.cli.simulate import main as simulate_main
 from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (iter_messages, jazzy_typestore, read_audio, read_manifest,
                                       read_truth, read_wrench)
-from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim import sound_bank
+from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              ORIGINAL_SETS, ranges_markdown, REAL_SOUND_SETS,
                                              resolve_conditions)
 from contact_detector.sim.trial import (G, PHASES, simulate_trial, simulate_trials,
                                         STOP_TORQUE_NM)
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
 
 SEED = 5
 ALL = ORIGINAL_SETS
@@ -614,7 +627,7 @@ def test_quiet_contact_and_ego_noise_families():
 
 @pytest.fixture(scope='module')
 def real_bank():
-    """The fetched sound bank; skipped (outside CI) when it has not been fetched."""
+    """Return the fetched sound bank; skip (outside CI) when it has not been fetched."""
     if not sound_bank.bank_available():
         why = (f'the real sound bank is not in {sound_bank.bank_dir()}: run '
                f'{sound_bank.FETCH_COMMAND} (tools/setup.sh does; needs apt-get)')

@@ -1,4 +1,19 @@
-"""Short soak (the CI version of benchmarks/bench_soak.py): memory stays flat.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Short soak (the CI version of benchmarks/bench_soak.py): memory stays flat.
 
 Simulated trials played in turn as one continuous stream at full speed, ``tracemalloc`` sampled
 every 30 simulated seconds after a full collection:
@@ -18,12 +33,11 @@ import linecache
 from pathlib import Path
 import sys
 
-import pytest
-
-import node_support
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
+
 from bench_soak import make_pool, run_soak  # noqa: E402
+import node_support  # noqa: E402
+import pytest  # noqa: E402
 
 
 @pytest.fixture(scope='module')

@@ -1,4 +1,19 @@
-"""The node on Ubuntu 24.04's library versions: the shipped model, a live trial, one release.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The node on Ubuntu 24.04's library versions: the shipped model, a live trial, one release.
 
 ``tools/ubuntu2404_env.sh`` (run by ``tools/test.sh`` before pytest) makes ``.venv-noble`` with
 exactly the apt versions of a stock Ubuntu 24.04 ROS 2 Jazzy install (numpy 1.26.4, scipy
@@ -15,9 +30,8 @@ from pathlib import Path
 import subprocess
 import time
 
-import pytest
-
 import node_support
+import pytest
 
 pytestmark = pytest.mark.rclpy
 
@@ -42,14 +56,14 @@ def _noble(args, log: Path) -> subprocess.Popen:
 
 @needs_noble
 def test_the_environment_has_exactly_ubuntu_2404s_versions_and_no_rosbags() -> None:
-    code = '''
+    code = """
 import importlib.metadata as md, importlib.util, json, sys
 import contact_detector.ros.node  # noqa: F401
 print(json.dumps({'versions': {n: md.version(n) for n in %r},
                   'rosbags': importlib.util.find_spec('rosbags') is not None,
                   'imported': sorted(m for m in ('sklearn', 'joblib', 'rosbags', 'matplotlib')
                                      if m in sys.modules)}))
-''' % (list(NOBLE_VERSIONS),)
+""" % (list(NOBLE_VERSIONS),)
     done = subprocess.run([str(NOBLE_PYTHON), '-c', code], cwd=REPO, capture_output=True,
                           text=True, timeout=120)
     assert done.returncode == 0, done.stderr

@@ -1,4 +1,19 @@
-"""Your robot, your data: labels CSV, evaluate --labels, train --with-sim, the tools/ helpers.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Your robot, your data: labels CSV, evaluate --labels, train --with-sim, the tools/ helpers.
 
 The "recordings" are simulated trials written as ROS 1 bags at 125 Hz F/T with no manifest
 beside them, as a user's own bags come: their truth is what the labels CSV says.
@@ -9,15 +24,14 @@ from pathlib import Path
 import subprocess
 import sys
 
-import pytest
-from rosbags.rosbag1 import Reader
-
 from contact_detector.cli import evaluate as evaluate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
 from contact_detector.model.bundle import load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import write_trial_bag
+import pytest
+from rosbags.rosbag1 import Reader
 
 ROOT = Path(__file__).resolve().parents[1]
 N_RECORDINGS = 3

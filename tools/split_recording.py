@@ -1,5 +1,21 @@
 #!/usr/bin/env python3
-"""Cut a ROS 1 recording with several labelled contacts into one bag per contact.
+
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Cut a ROS 1 recording with several labelled contacts into one bag per contact.
 
     tools/split_recording.py BAG.bag --labels labels.csv --out DIR
 
@@ -17,9 +33,8 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from rosbags.rosbag1 import Reader, Writer
-
 from contact_detector.model.training import read_labels_csv
+from rosbags.rosbag1 import Reader, Writer
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

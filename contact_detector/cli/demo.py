@@ -1,4 +1,19 @@
-"""``contact-detector demo``: the whole detector, live, on a laptop with no robot.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector demo``: the whole detector, live, on a laptop with no robot.
 
     contact-detector demo [--trials 6] [--seed 7] [--out DIR] [--model M]
 
@@ -24,12 +39,11 @@ import threading
 import time
 from typing import List, Optional, Sequence
 
-import numpy as np
-
 from contact_detector.evaluation.metrics import score_trial, summarize, Truth
 from contact_detector.model.bundle import default_model_path
 from contact_detector.sim.bag_writer import write_manifest, write_trial_bag
 from contact_detector.sim.trial import simulate_trial, Trial
+import numpy as np
 
 NODE_NAME = 'contact_detector'
 

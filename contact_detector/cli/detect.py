@@ -1,4 +1,19 @@
-"""``contact-detector detect``: run the node's processing on bags, in bag time.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector detect``: run the node's processing on bags, in bag time.
 
     contact-detector detect BAG_OR_DIR... [--model M] [--params P] [--wrench-topic T]
                             [--audio-topic T] [--audio-rate HZ] [--wrench-rate HZ]
@@ -27,8 +42,6 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from tqdm import tqdm
-
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.detection.release import rule_overrides
@@ -39,6 +52,7 @@ from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
 from contact_detector.model.bundle import (DecisionRule, default_ft_model_path,
                                            default_model_path, load_bundle, ModelBundle)
+from tqdm import tqdm
 
 
 def read_node_params(path: Path) -> dict:
@@ -79,23 +93,23 @@ def read_node_params(path: Path) -> dict:
 def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
     """Map node parameters onto (DetectorSettings, StreamSpec fields, model path, rule)."""
     rule = rule_overrides(params) or None
-    settings = dict(
-        audio_rate=float(audio_rate or params.get('audio.sample_rate', 16000)),
-        wrench_rate=float(params.get('wrench.rate', 100.0)),
-        max_input_delay_s=float(params.get('max_input_delay_s', 0.5)),
-        max_ft_wait_s=float(params.get('max_ft_wait_s', 0.25)),
-        warmup_s=float(params.get('warmup_s', 0.5)),
-        corrupt_holdoff_s=float(params.get('corrupt_holdoff_s', 0.2)),
-    )
+    settings = {
+        'audio_rate': float(audio_rate or params.get('audio.sample_rate', 16000)),
+        'wrench_rate': float(params.get('wrench.rate', 100.0)),
+        'max_input_delay_s': float(params.get('max_input_delay_s', 0.5)),
+        'max_ft_wait_s': float(params.get('max_ft_wait_s', 0.25)),
+        'warmup_s': float(params.get('warmup_s', 0.5)),
+        'corrupt_holdoff_s': float(params.get('corrupt_holdoff_s', 0.2)),
+    }
     age = params.get('max_ft_age_s', 0.0)
     if age and age > 0:
         settings['max_ft_age_s'] = float(age)
     channel = int(params.get('audio.channel', -1))
     # The bag's audio must have the node's type (the node would not even subscribe otherwise).
     msg_type = params.get('audio.msg_type')
-    stream = dict(channels=int(params.get('audio.channels', 1)),
-                  channel=None if channel < 0 else channel,
-                  audio_msg_type=normalise_msg_type(msg_type) if msg_type else None)
+    stream = {'channels': int(params.get('audio.channels', 1)),
+              'channel': None if channel < 0 else channel,
+              'audio_msg_type': normalise_msg_type(msg_type) if msg_type else None}
     return settings, stream, params.get('model.path', ''), rule
 
 

@@ -1,4 +1,19 @@
-"""``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
 
     contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-ft|threshold|highpass|
                               lowpass-bandpass|audio-onset|all ...] [--model M] [--ft-model M]
@@ -27,9 +42,6 @@ from pathlib import Path
 import sys
 from typing import Dict, List, Optional, Sequence
 
-import numpy as np
-from tqdm import tqdm
-
 from contact_detector.cli.detect import (add_stream_arguments, build_detector_factory,
                                          discover_all, read_node_params, stream_spec)
 from contact_detector.cli.train import conditions_of
@@ -43,6 +55,8 @@ from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 from contact_detector.model.training import read_labels_csv
+import numpy as np
+from tqdm import tqdm
 
 #: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
 #: with an audio topic, F/T-only without); ``forest-ft``: the F/T-only model (``--ft-model``,

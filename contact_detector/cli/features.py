@@ -1,4 +1,19 @@
-"""``contact-detector features``: run the streaming feature core on a generated signal.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector features``: run the streaming feature core on a generated signal.
 
 A quick look at the feature core with no robot and no data: a synthetic 5 s recording (a
 held load, a contact-like load drop with a ring-down and an impact sound at 3 s) goes through
@@ -10,9 +25,8 @@ import argparse
 import sys
 from typing import Optional, Sequence
 
-import numpy as np
-
 from contact_detector.features import FeatureConfig, FeatureFrames, StreamingFeatureExtractor
+import numpy as np
 
 
 def synthetic_recording(*, audio_rate: int, ft_rate: float, seconds: float = 5.0,

@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 ``contact-detector label BAG_OR_DIR... --out labels.csv [--plots DIR]``: propose contact onsets.
 
@@ -16,14 +30,13 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-import numpy as np
-from tqdm import tqdm
-
 from contact_detector.errors import ContactDetectorError
-from contact_detector.evaluation.labelling import propose_onset, Proposal
+from contact_detector.evaluation.labelling import Proposal, propose_onset
 from contact_detector.io.bags import find_bags, manifest_entry, read_wrench, topic_types
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
+import numpy as np
+from tqdm import tqdm
 
 PROG = 'contact-detector label'
 #: Columns of the CSV (the first three are what every labels reader needs).
@@ -87,8 +100,8 @@ def label_bag(bag: Path, *, args: argparse.Namespace) -> tuple[Proposal, dict]:
     t, force, torque = t[keep], wrench.force[order][keep], wrench.torque[order][keep]
     proposal = propose_onset(ft_t=t, force=force, torque=torque, audio=audio,
                              audio_rate=rate, audio_t0=audio_t0)
-    return proposal, dict(t=t, force=force, torque=torque, audio=audio, rate=rate,
-                          audio_t0=audio_t0, truth=entry.get('onset_t'))
+    return proposal, {'t': t, 'force': force, 'torque': torque, 'audio': audio, 'rate': rate,
+                      'audio_t0': audio_t0, 'truth': entry.get('onset_t')}
 
 
 def plot_proposal(*, bag: Path, proposal: Proposal, data: dict, output: Path) -> Path:

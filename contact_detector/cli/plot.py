@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 ``contact-detector plot BAG -o fig.png``: a figure like the paper's figure 4.
 
@@ -14,13 +28,12 @@ from pathlib import Path
 import sys
 from typing import Sequence
 
-import numpy as np
-
 from contact_detector.errors import ContactDetectorError
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags, manifest_entry, read_truth, read_wrench
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
+import numpy as np
 
 PROG = 'contact-detector plot'
 PHASE_COLOURS = {'rest': '#eeeeee', 'lift': '#d9e8f5', 'hold': '#f3f3e0',

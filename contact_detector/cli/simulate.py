@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 ``contact-detector simulate OUT_DIR --trials N --seed S``: write simulated trials as rosbag2.
 
@@ -12,12 +26,11 @@ import shutil
 import sys
 from typing import Sequence
 
-from tqdm import tqdm
-
 from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
 from contact_detector.sim.conditions import ALIASES, CONDITION_SETS, resolve_conditions
 from contact_detector.sim.trial import simulate_trial, simulate_trials
+from tqdm import tqdm
 
 PROG = 'contact-detector simulate'
 

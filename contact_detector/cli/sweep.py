@@ -1,4 +1,19 @@
-"""``contact-detector sweep``: choose features, label window and decision rule by measurement.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``contact-detector sweep``: choose features, label window and decision rule by measurement.
 
     contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
     contact-detector sweep DIR... --lofo [--lofo-settings shipped,invariant] [--out FILE.md]
@@ -22,8 +37,6 @@ from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
-from tqdm import tqdm
-
 from contact_detector.cli.evaluate import truth_for
 from contact_detector.cli.train import conditions_of, DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.features.config import FeatureConfig
@@ -34,6 +47,7 @@ from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetti
                                           fit_forest, leave_one_family_out, rows_markdown,
                                           score_rules, worst_family)
 from contact_detector.model.training import LabelWindow
+from tqdm import tqdm
 
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 #: The audio features measured against the tracked noise floor, and the two of round 4.

@@ -1,4 +1,19 @@
-"""A whole recording through the detector in a few array operations, bit-identical to live.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A whole recording through the detector in a few array operations, bit-identical to live.
 
 :func:`contact_detector.detection.offline.run_detector` feeds a recording to
 :class:`~contact_detector.detection.detector.ContactDetector` one message at a time, as the node
@@ -26,8 +41,6 @@ from dataclasses import dataclass
 import math
 from typing import List, Optional
 
-import numpy as np
-
 from contact_detector.detection.detector import (AudioRateCheck, CLIP_LEVEL, ContactDetector,
                                                  Decisions)
 from contact_detector.errors import InputError
@@ -36,6 +49,7 @@ from contact_detector.features.config import AUDIO_FEATURES
 from contact_detector.features.streaming import (FeatureFrames, frame_ends,
                                                  StreamingFeatureExtractor, to_unit_audio)
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
+import numpy as np
 
 #: Audio frames per power block (bounds the frame matrix: 4096 x 1536 x 8 B = 50 MB at 48 kHz).
 POWER_BLOCK = 4096

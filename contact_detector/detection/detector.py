@@ -1,4 +1,19 @@
-"""The detector pipeline: feature core + compiled forest + release logic + input health.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The detector pipeline: feature core + compiled forest + release logic + input health.
 
 :class:`ContactDetector` is everything the node does between "a message arrived, here are its
 arrays" and "publish these decisions". The live node, ``detect``, ``evaluate`` and the demo all
@@ -11,13 +26,12 @@ from dataclasses import dataclass, field, replace
 import math
 from typing import Optional, Sequence, Union
 
-import numpy as np
-
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
                                                  TimeJumpError, to_unit_audio)
 from contact_detector.model.bundle import DecisionRule, ModelBundle
+import numpy as np
 
 #: A dropped message's stamp is trusted at most this far ahead of the newest accepted input, s
 #: (a corrupt message may carry any stamp; its hold-off must not block releases for ever).
@@ -232,7 +246,7 @@ class ContactDetector:
         self.logic = ReleaseLogic(rule=self.rule, armed=settings.armed_on_start)
         self.rate_check = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
             rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
-        self.counts = {name: 0 for name in self.COUNTERS}
+        self.counts = dict.fromkeys(self.COUNTERS, 0)
         self.last_error: Optional[str] = None
         self.reset()
 

@@ -1,4 +1,19 @@
-"""No blind spot when the audio stream dies: an F/T-only model stands in for the multimodal one.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+No blind spot when the audio stream dies: an F/T-only model stands in for the multimodal one.
 
 :class:`AudioFallback` drives two :class:`ContactDetector` s: the multimodal one (``primary``)
 gets every message, the F/T-only one (``fallback``) every wrench message, so it is warm when it
@@ -18,10 +33,9 @@ never count towards its release.
 import math
 from typing import Optional, Sequence
 
-import numpy as np
-
 from contact_detector.detection.detector import ContactDetector, Decisions
 from contact_detector.errors import ConfigError
+import numpy as np
 
 #: Names of the two models in :attr:`AudioFallback.active_name` and the switch messages.
 MULTIMODAL, FT_ONLY = 'audio + F/T', 'F/T-only'
@@ -77,7 +91,7 @@ class AudioFallback:
 
     @property
     def settings(self):
-        """The multimodal detector's settings."""
+        """Return the multimodal detector's settings."""
         return self.primary.settings
 
     @property
@@ -87,7 +101,7 @@ class AudioFallback:
 
     @property
     def rule(self):
-        """The active detector's decision rule."""
+        """Return the active detector's decision rule."""
         return self.active.rule
 
     @property
@@ -97,12 +111,12 @@ class AudioFallback:
 
     @property
     def last_error(self) -> Optional[str]:
-        """The last drop or reset reason of either detector."""
+        """Return the last drop or reset reason of either detector."""
         return self.active.last_error or self.primary.last_error
 
     @property
     def counts(self) -> dict:
-        """The multimodal detector's counters, the F/T-only one's as ``ft_*`` and switches."""
+        """Return the multimodal counters, the F/T-only ones as ``ft_*``, and the switches."""
         out = dict(self.primary.counts)
         for name in ('frames', 'events', 'releases', 'wrench_dropped', 'stale_frames'):
             out[f'ft_{name}'] = self.fallback.counts[name]

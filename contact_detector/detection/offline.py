@@ -1,4 +1,19 @@
-"""Drive the detector pipeline from recorded sensor events (bag time, no ROS).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Drive the detector pipeline from recorded sensor events (bag time, no ROS).
 
 ``detect``, ``evaluate``, ``train`` and the sweep call these, so offline results come from the
 exact code the node runs: events go to :class:`ContactDetector` (or its feature extractor) in
@@ -8,11 +23,10 @@ log-time order, audio stamped as the node stamps it.
 from dataclasses import dataclass, field
 from typing import Iterable, List
 
-import numpy as np
-
 from contact_detector.detection.detector import ContactDetector, Decisions
 from contact_detector.features.streaming import FeatureFrames, StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
+import numpy as np
 
 
 @dataclass

@@ -1,4 +1,19 @@
-"""Release logic: from per-frame contact probabilities to release events.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Release logic: from per-frame contact probabilities to release events.
 
 Pure state machine, no ROS, no clock: frame times are passed in.
 """
@@ -8,10 +23,9 @@ from itertools import islice
 import math
 from typing import Any, Dict, Mapping, Optional
 
-import numpy as np
-
 from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import DecisionRule
+import numpy as np
 
 #: Node parameter -> (DecisionRule field, smallest value that overrides the model's rule).
 #: Below it (negative, or 0 for the frame counts that must be >= 1) the model's field applies.

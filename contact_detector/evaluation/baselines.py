@@ -1,4 +1,19 @@
-"""Baseline detectors, streamed through the same interface as ContactDetector.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Baseline detectors, streamed through the same interface as ContactDetector.
 
 So that every detector is measured on the same trials by the same scorer, each baseline takes
 the same calls (``on_audio``, ``on_wrench``, ``drop``, ``flush``) and returns the same
@@ -18,15 +33,14 @@ careful engineer would set them by hand; the fixed torque threshold is the recor
 import math
 from typing import Optional
 
-import numpy as np
-from scipy import signal
-
 from contact_detector.detection.detector import Decisions
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.model.bundle import DecisionRule
+import numpy as np
+from scipy import signal
 
 BASELINES = ('threshold', 'highpass', 'lowpass-bandpass', 'audio-onset')
 

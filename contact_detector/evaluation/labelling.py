@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 r"""
 Hindsight labelling: propose a recording's contact onset from its whole F/T and audio.
 
@@ -57,9 +71,8 @@ from dataclasses import dataclass, field
 import math
 from typing import Optional
 
-import numpy as np
-
 from contact_detector.errors import InputError
+import numpy as np
 
 #: Reasons a recording gets no onset.
 NO_CHANGE = 'no lasting load change'
@@ -271,6 +284,7 @@ def audio_onset(*, audio: np.ndarray, rate: float, t0: float, around: float,
         The F/T onset, s; the sound may start in ``[around + audio_lo_s, around +
         audio_hi_s]``.
     settings : LabelSettings
+        Thresholds and windows of the search.
 
     Returns
     -------
@@ -332,6 +346,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     audio_t0 : float or None
         Time of audio sample 0, s.
     settings : LabelSettings
+        Thresholds and windows of the search.
 
     Returns
     -------

@@ -1,4 +1,19 @@
-"""Straightforward batch reference of the feature core.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Straightforward batch reference of the feature core.
 
 Written for clarity, with plain loops over frames, from whole recordings. The streaming code
 (:mod:`contact_detector.features.streaming`) must give the same numbers for any chunking; the
@@ -9,13 +24,12 @@ tests compare the two. Offline tools may use it for plots, never for training or
 import math
 from typing import Optional
 
-import numpy as np
-
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
                                               SHIFT_FEATURES)
 from contact_detector.features.resample import integer_ratio, WrenchResampler
 from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
+import numpy as np
 
 
 def batch_audio_power(*, config: FeatureConfig, audio: np.ndarray, audio_rate: float,

@@ -1,4 +1,19 @@
-"""Feature configuration: the contract between the feature core, the model file and the node.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Feature configuration: the contract between the feature core, the model file and the node.
 
 A :class:`FeatureConfig` fully determines the feature vector computed for every audio frame.
 It is stored inside every model bundle; loading a model refuses a configuration that differs
@@ -224,7 +239,7 @@ class FeatureConfig:
 
     @property
     def ft_only(self) -> bool:
-        """True when no column comes from the audio: frames are clocked by the F/T stream."""
+        """Return True when no column comes from the audio (frames clocked by the F/T stream)."""
         return not self.audio
 
     def audio_frame_samples(self, sample_rate: float) -> int:

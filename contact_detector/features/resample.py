@@ -1,4 +1,19 @@
-"""Causal resampling of wrench samples of any rate onto the F/T feature grid.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Causal resampling of wrench samples of any rate onto the F/T feature grid.
 
 The F/T features are computed on samples at ``ft_rate_hz`` (:class:`FeatureConfig`). Sensors
 run at other rates (51, 125, 200, 333 Hz, 1 or 10 kHz); :class:`WrenchResampler` turns their
@@ -28,9 +43,8 @@ Stamps are the header stamps (seconds); a stream restart (a gap, a time jump) is
 import math
 from typing import Optional
 
-import numpy as np
-
 from contact_detector.errors import ConfigError
+import numpy as np
 
 #: Wrench rates accepted, Hz.
 MIN_INPUT_RATE = 50.0

@@ -1,4 +1,19 @@
-"""Pure per-frame feature functions (paper eqs. 1-4), vectorised over frames.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Pure per-frame feature functions (paper eqs. 1-4), vectorised over frames.
 
 Every function takes a 2-D array of frames, shape ``(n_frames, frame_length)``, or of spectra,
 shape ``(n_frames, n_bins)``, and returns one value per frame. None of them keeps state; the

@@ -1,4 +1,19 @@
-"""Streaming feature core: ring buffers, time anchoring and causal alignment.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Streaming feature core: ring buffers, time anchoring and causal alignment.
 
 Three small stateful classes, each with ``reset()``:
 
@@ -21,13 +36,12 @@ from dataclasses import dataclass
 import math
 from typing import Optional, Sequence
 
-import numpy as np
-
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, CHANGE_FEATURES, DELTA_FEATURES,
                                               FeatureConfig, PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.resample import WrenchResampler
+import numpy as np
 
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]

@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Shared bag helpers: finding bags, reading messages, ground truth and manifests.
 
@@ -18,14 +32,13 @@ import json
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, NamedTuple, Sequence
 
+from contact_detector.errors import BagError
+from contact_detector.io import ros1
 import numpy as np
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
-
-from contact_detector.errors import BagError
-from contact_detector.io import ros1
 
 #: Topic and type names written by the simulator and read by the tools.
 WRENCH_TOPIC = '/wrist_wrench'

@@ -1,4 +1,19 @@
-"""Direct readers for the CDR bytes of the two sensor types every recording has, and writers.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Direct readers for the CDR bytes of the two sensor types every recording has, and writers.
 
 rosbags deserialises a message through generated Python (~15-30 us per message); offline
 ``detect`` reads ~200 sensor messages per second of recording, so decoding alone would cap it

@@ -1,4 +1,19 @@
-"""Find a bag's sensor topics, audio format and F/T rate, so offline commands need no flags.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Find a bag's sensor topics, audio format and F/T rate, so offline commands need no flags.
 
 * Wrench topic: the one topic of type ``geometry_msgs/msg/WrenchStamped``.
 * Audio topic: the one topic of a supported audio type (:data:`AUDIO_MSG_TYPES`).
@@ -25,8 +40,6 @@ import math
 from pathlib import Path
 from typing import Optional, Sequence
 
-import numpy as np
-
 from contact_detector.errors import BagError, ConfigError, InputError
 from contact_detector.io.bags import iter_messages, topic_types
 from contact_detector.io.cdr import FAST_DECODERS
@@ -34,6 +47,7 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_to_samples, che
                                           embedded_audio_format, normalise_msg_type,
                                           wrench_sample)
 from contact_detector.io.mp3 import mp3_format
+import numpy as np
 
 WRENCH_TYPE = 'geometry_msgs/msg/WrenchStamped'
 AUDIO_INFO_TYPE = 'audio_common_msgs/msg/AudioInfo'
@@ -357,11 +371,16 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
 
 def summary_lines(found: Sequence[tuple]) -> list:
     """
-    Lines that say what was found: one for all bags if they agree, else one per bag.
+    Return lines that say what was found: one for all bags if they agree, else one per bag.
 
     Parameters
     ----------
     found : sequence of (Path, Streams)
+        Each bag with the streams discovery found in it.
+
+    Returns
+    -------
+    list of str
 
     """
     texts = [(bag, streams.describe()) for bag, streams in found]

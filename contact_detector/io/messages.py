@@ -1,4 +1,19 @@
-"""Message -> array adapters shared by the live node and the offline tools.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Message -> array adapters shared by the live node and the offline tools.
 
 Pure and duck-typed: no ROS import. The same functions read rclpy messages (arrays are
 ``array.array`` or ``bytes``), rosbags-deserialised messages (arrays are numpy) and test doubles
@@ -27,9 +42,8 @@ from dataclasses import dataclass
 import math
 from typing import Any, Optional
 
-import numpy as np
-
 from contact_detector.errors import ConfigError, InputError
+import numpy as np
 
 #: Sample rates the feature core accepts, Hz (see ``AudioFramer``).
 MIN_SAMPLE_RATE = 1000.0

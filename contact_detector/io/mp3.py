@@ -1,4 +1,19 @@
-"""Decode an mp3 stream carried in ``audio_common_msgs/AudioData`` messages, with sample times.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Decode an mp3 stream carried in ``audio_common_msgs/AudioData`` messages, with sample times.
 
 audio_common's capture node (ros-drivers) publishes mp3 by default: each message holds the
 next bytes of one mp3 stream, and ``AudioInfo`` says ``coding_format: mp3``. The messages carry
@@ -26,9 +41,8 @@ transport delay) and sample ``i`` is at ``t_0 + i / rate``.
 import io
 from typing import NamedTuple, Sequence
 
-import numpy as np
-
 from contact_detector.errors import InputError
+import numpy as np
 
 #: LAME's encoder delay (576) plus the mp3 decoder's delay (529), in samples.
 LAME_DELAY = 576 + 529

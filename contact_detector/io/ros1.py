@@ -1,4 +1,19 @@
-"""ROS 1 bags: direct readers of the sensor types, and ROS 1 -> ROS 2 message conversion.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS 1 bags: direct readers of the sensor types, and ROS 1 -> ROS 2 message conversion.
 
 ROS 1 serialisation is packed little-endian without alignment (a ``string`` or array is a
 ``uint32`` length and its elements). rosbags deserialises ROS 1 messages with the type
@@ -15,9 +30,8 @@ CDR readers (:mod:`contact_detector.io.cdr`), so the offline tools use one adapt
 import struct
 from typing import Any, Optional
 
-import numpy as np
-
 from contact_detector.io.cdr import Bool, Layout, MultiArray, Stamp
+import numpy as np
 
 _U32 = struct.Struct('<I')
 _STAMP = struct.Struct('<II')

@@ -1,4 +1,19 @@
-"""Bag -> sensor events, in the order and with the times the live node would see them.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Bag -> sensor events, in the order and with the times the live node would see them.
 
 Every offline tool (``train``, ``detect``, ``evaluate``, the sweep, the demo's checks) reads
 recordings through :func:`sensor_events`, which applies the node's own message adapters
@@ -12,12 +27,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, List, Optional, Union
 
-import numpy as np
-
 from contact_detector.errors import BagError, InputError
 from contact_detector.io import cdr
 from contact_detector.io.bags import AudioSeries, iter_messages
 from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
+import numpy as np
 
 DEFAULT_AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
 

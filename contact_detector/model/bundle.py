@@ -1,4 +1,19 @@
-"""The model bundle: a trained forest plus everything needed to use it correctly.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The model bundle: a trained forest plus everything needed to use it correctly.
 
 A bundle is saved as three files side by side::
 
@@ -35,13 +50,12 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 import warnings
 import zipfile
 
-import numpy as np
-
 import contact_detector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.model.compiled_forest import CompiledForest, DEFAULT_CODEGEN_DEPTH
 from contact_detector.model.forest_arrays import boundary_frames, ForestArrays
+import numpy as np
 
 #: Version of the payload dict inside model files and of the card layout.
 PAYLOAD_VERSION = 1
@@ -354,19 +368,19 @@ class ModelBundle:
 
     @functools.cached_property
     def trees(self) -> ForestArrays:
-        """The forest as :class:`ForestArrays` (converted once from a scikit-learn forest)."""
+        """Return the forest as :class:`ForestArrays` (converted once from scikit-learn's)."""
         if isinstance(self.forest, ForestArrays):
             return self.forest
         return ForestArrays.from_sklearn(self.forest)
 
     @property
     def sklearn_forest(self) -> Any:
-        """The scikit-learn forest, or None for a bundle loaded from an npz file."""
+        """Return the scikit-learn forest, or None for a bundle loaded from an npz file."""
         return None if isinstance(self.forest, ForestArrays) else self.forest
 
     @property
     def n_estimators(self) -> int:
-        """Number of trees."""
+        """Return the number of trees."""
         return self.trees.n_trees
 
     @property
@@ -406,7 +420,8 @@ class ModelBundle:
         return {name: float(value)
                 for name, value in zip(self.feature_names, self.trees.feature_importances)}
 
-    def compile(self, *, codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> CompiledForest:
+    def compile(self, *,  # noqa: A003 (a method: the builtin stays reachable)
+                codegen_depth: int = DEFAULT_CODEGEN_DEPTH) -> CompiledForest:
         """Return a :class:`CompiledForest` of the forest (about 1.5 s for 8 x 20k nodes)."""
         return CompiledForest.from_arrays(self.trees, codegen_depth=codegen_depth)
 

@@ -1,4 +1,19 @@
-"""A random forest flattened for fast, bit-exact inference without scikit-learn's overhead.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A random forest flattened for fast, bit-exact inference without scikit-learn's overhead.
 
 scikit-learn's ``RandomForestClassifier.predict_proba`` costs 0.7-1 ms per call
 whatever the batch size (input validation, a thread pool, one array per tree). The live node
@@ -39,10 +54,9 @@ import math
 import threading
 from typing import Any, Callable, List, Sequence, Tuple
 
-import numpy as np
-
 from contact_detector.errors import InputError, ModelError
 from contact_detector.model.forest_arrays import ForestArrays, update_tree_digest
+import numpy as np
 
 #: Levels of each tree compiled to Python code. Python's tokenizer refuses more than 100 levels
 #: of indentation, hence the cap. Compiling costs about 8 us per node (~1.5 s for 8 trees of

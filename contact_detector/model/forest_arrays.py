@@ -1,4 +1,19 @@
-"""A fitted random forest as plain numpy arrays: the ``.npz`` model format, numpy only.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A fitted random forest as plain numpy arrays: the ``.npz`` model format, numpy only.
 
 :class:`ForestArrays` holds the trees of a binary ``RandomForestClassifier`` exactly as
 scikit-learn stores them (``tree_.children_left/right``, ``feature``, ``threshold``,
@@ -33,9 +48,8 @@ from pathlib import Path
 from typing import Any, Dict, Mapping, Optional
 import zipfile
 
-import numpy as np
-
 from contact_detector.errors import ModelError
+import numpy as np
 
 #: Version of the npz layout above.
 NPZ_VERSION = 1
@@ -223,17 +237,17 @@ class ForestArrays:
 
     @property
     def n_trees(self) -> int:
-        """Number of trees."""
+        """Return the number of trees."""
         return int(self.tree_offsets.shape[0] - 1)
 
     @property
     def n_estimators(self) -> int:
-        """Number of trees (scikit-learn's name)."""
+        """Return the number of trees (scikit-learn's name)."""
         return self.n_trees
 
     @property
     def n_nodes(self) -> int:
-        """Number of nodes of all trees."""
+        """Return the number of nodes of all trees."""
         return int(self.children_left.shape[0])
 
     def tree_node_counts(self) -> list:

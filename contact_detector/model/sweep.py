@@ -1,4 +1,19 @@
-"""Choose defaults by measurement: feature settings x label windows x decision rules.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Choose defaults by measurement: feature settings x label windows x decision rules.
 
 Each feature setting is computed with the streaming core on every bag (decoded once), a forest
 is trained on the training trials, and its probabilities on the held-out trials are turned
@@ -10,10 +25,6 @@ re-measures the chosen defaults through the full detector.
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
 
-from joblib import delayed, Parallel
-import numpy as np
-from sklearn.ensemble import RandomForestClassifier
-
 from contact_detector.detection.offline import run_features
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize, Truth)
@@ -22,6 +33,9 @@ from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.training import LabelWindow
+from joblib import delayed, Parallel
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,19 @@
-"""Training protocol of the contact forest (paper section 4.4 and 5), on the streaming features.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Training protocol of the contact forest (paper section 4.4 and 5), on the streaming features.
 
 Features come from recordings through :func:`contact_detector.detection.offline.run_features`,
 the same code path the node runs. The protocol follows the paper: a 56/19/25 split,
@@ -13,14 +28,13 @@ from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence
 import warnings
 
-import numpy as np
-
 from contact_detector.detection.offline import run_features
 from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
+import numpy as np
 
 SPLIT = (0.56, 0.19, 0.25)
 
@@ -212,7 +226,9 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     kind : str
         'sample' or 'trial'.
     x : np.ndarray, shape (n, n_features)
+        Feature frames.
     y : np.ndarray, shape (n,)
+        Frame labels (1 = contact).
     groups : np.ndarray, shape (n,)
         Trial index of each frame.
     trial_names : sequence of str

@@ -1,11 +1,24 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Optional gripper adapter: the JointTrajectory that opens the gripper on a release."""
 
 import math
 
 from builtin_interfaces.msg import Duration
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-
 from contact_detector.errors import ConfigError
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 #: The HSR's gripper: joint ``hand_motor_joint`` opens at 1.2 rad.
 HSR_GRIPPER_JOINT = 'hand_motor_joint'

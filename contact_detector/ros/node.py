@@ -1,4 +1,19 @@
-"""The live contact detector node.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The live contact detector node.
 
 It converts messages to arrays (:mod:`contact_detector.io.messages`), hands them to
 :class:`~contact_detector.detection.detector.ContactDetector` (all the logic: features, forest,
@@ -34,38 +49,36 @@ import sys
 import time
 from typing import Any, Callable, Dict, Optional
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import WrenchStamped
-import numpy as np
-import rclpy
-from rclpy.clock import ClockChange, JumpThreshold
-from rclpy.duration import Duration
-from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
-from rclpy.node import Node
-from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data,
-                       ReliabilityPolicy)
-from rclpy.serialization import deserialize_message
-from rcl_interfaces.msg import SetParametersResult
-from std_msgs.msg import Bool, Float32
-from std_srvs.srv import SetBool, Trigger
-from trajectory_msgs.msg import JointTrajectory
-
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
 from contact_detector.features.resample import rate_mismatch, StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
-from contact_detector.io.messages import (AUDIO_MSG_TYPES, AudioFormat, AudioMsgType,
-                                          audio_stamp, audio_to_samples, check_audio_info,
-                                          check_stamp, embedded_audio_format,
-                                          wrench_sample)
+from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
+                                          AudioFormat, AudioMsgType, check_audio_info, check_stamp,
+                                          embedded_audio_format, wrench_sample)
 from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
                                            load_bundle, ModelBundle)
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
                                          declare_parameters, NodeConfig, PARAMS_BY_NAME)
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+from rcl_interfaces.msg import SetParametersResult
+import rclpy
+from rclpy.clock import ClockChange, JumpThreshold
+from rclpy.duration import Duration
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile,
+                       ReliabilityPolicy)
+from rclpy.serialization import deserialize_message
+from std_msgs.msg import Bool, Float32
+from std_srvs.srv import SetBool, Trigger
+from trajectory_msgs.msg import JointTrajectory
 
 #: A backwards jump of the node clock larger than this resets the detector, s.
 CLOCK_JUMP_RESET_S = 0.1
@@ -208,7 +221,7 @@ class DetectorWiring:
         self.ft_bundle = (load_bundle(path=default_ft_model_path())
                           if self.use_audio and cfg.audio_timeout_s > 0 else None)
         self._audio_class, self._info_class = audio_class, info_class
-        self.counts = {name: 0 for name in NODE_COUNTERS}
+        self.counts = dict.fromkeys(NODE_COUNTERS, 0)
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
         self._pending: Optional[NodeConfig] = None

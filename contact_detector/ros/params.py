@@ -1,4 +1,19 @@
-"""Parameters of the contact detector node: declaration, validation, and the frozen config.
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Parameters of the contact detector node: declaration, validation, and the frozen config.
 
 Every parameter is declared with a :class:`rcl_interfaces.msg.ParameterDescriptor`
 (description, numeric range, read-only where a change at run time makes no sense), so
@@ -13,15 +28,14 @@ from dataclasses import dataclass
 import math
 from typing import Any, Dict, Mapping, Optional, Sequence
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-from rclpy.exceptions import ParameterException
-from rclpy.node import Node
-
 from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, MAX_SAMPLE_RATE, MIN_SAMPLE_RATE,
                                           normalise_msg_type)
 from contact_detector.model.bundle import DecisionRule
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
 
 STAMP_SOURCES = ('receive', 'header')
 RELIABILITIES = ('best_effort', 'reliable')

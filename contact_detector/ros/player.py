@@ -1,4 +1,19 @@
-"""Publish a bag into the live ROS graph with its original timing (no ``ros2 bag``).
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Publish a bag into the live ROS graph with its original timing (no ``ros2 bag``).
 
 rosbag2 messages go out as their recorded CDR bytes, so any type rclpy can import plays back
 unchanged; ROS 1 bags are converted to ROS 2 CDR first
@@ -19,11 +34,11 @@ import threading
 import time
 from typing import Callable, Dict, List, Optional, Sequence
 
+from contact_detector.errors import BagError
+from contact_detector.io.bags import iter_cdr
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
-from contact_detector.errors import BagError
-from contact_detector.io.bags import iter_cdr
 
 CLOCK_PERIOD_S = 0.01
 

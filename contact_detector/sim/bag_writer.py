@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Write simulated trials as rosbag2 (sqlite3, mcap) or ROS 1 bags, plus the JSON manifest.
 
@@ -19,15 +33,14 @@ from pathlib import Path
 import struct
 from typing import Iterable, Mapping
 
-import numpy as np
-from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import get_typestore, Stores
-
 from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (AUDIO_TOPIC, AUDIO_TYPE, jazzy_typestore, MANIFEST_NAME,
                                       TRUTH_TOPIC, TRUTH_TYPE, WRENCH_TOPIC, WRENCH_TYPE)
 from contact_detector.sim.trial import Trial
+import numpy as np
+from rosbags.rosbag1 import Writer as Ros1Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
 
 FRAME_ID = 'wrist_ft_sensor_frame'
 #: rosbag2 storage plugins, and ``ros1`` for a ROS 1 ``.bag`` file.

@@ -1,3 +1,17 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Synthesis of one placing trial: wrist force/torque, microphone audio and ground truth.
 
@@ -35,12 +49,11 @@ from dataclasses import dataclass, field
 import math
 from typing import Iterator, Sequence
 
-import numpy as np
-
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
 from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_KINDS, get_condition,
                                              resolve_conditions)
+import numpy as np
 
 #: Gravity in m/s^2.
 G = 9.81
@@ -1085,8 +1098,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     descent_dist = v_d * (0.5 * p['accel_s'] + p['descend_s'])
     if q['decel']:
         descent_dist = p['lift_dist_m'] - z_contact
-    tl = dict(t_lift0=t_lift0, t_hold0=t_hold0, t_acc0=t_acc0, t_desc0=t_desc0, onset=onset,
-              z_contact=z_contact, descent_dist=descent_dist, v_c=v_c)
+    tl = {'t_lift0': t_lift0, 't_hold0': t_hold0, 't_acc0': t_acc0, 't_desc0': t_desc0,
+          'onset': onset, 'z_contact': z_contact, 'descent_dist': descent_dist, 'v_c': v_c}
     if q['contact_model'] == 'compliant':
         # the object's weight moves to the table in about transfer_s
         k_eff = m_obj * G / (v_c * q['transfer_s'])
