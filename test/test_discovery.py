@@ -265,6 +265,26 @@ def test_several_candidate_topics_are_listed_and_a_flag_chooses(tmp_path, capsys
         discover_streams(only)
 
 
+def test_a_bag_without_audio_is_found_only_for_an_ft_only_model(tmp_path, capsys):
+    # A robot without a microphone, recorded with ROS 1: no audio topic at all.
+    trial = simulate_trial(seed=12, index=0)
+    bag = write_trial_bag(trial=trial, path=tmp_path / trial.name, storage='ros1', audio=False)
+    with pytest.raises(BagError, match='no audio .* topic'):
+        discover_streams(bag)
+    streams = discover_streams(bag, allow_no_audio=True)
+    assert streams.audio_topic is None and not streams.has_audio
+    assert streams.wrench_topic == '/wrist_wrench' and round(streams.wrench_rate) == 100
+    assert 'no audio topic' in streams.describe()
+    # An explicit audio topic that is missing stays an error.
+    with pytest.raises(BagError, match='no topic /mic'):
+        discover_streams(bag, audio_topic='/mic', allow_no_audio=True)
+    # detect routes the bag to the shipped F/T-only model.
+    assert detect_cli.main([str(bag), '--out', str(tmp_path / 'o.jsonl')]) == 0
+    out = capsys.readouterr().out
+    assert 'no audio topic' in out and 'contact_forest_ft.npz' in out
+    assert len([r for r in _rows(tmp_path / 'o.jsonl') if 'p' in r]) > 300
+
+
 def test_iter_messages_reads_ros1_with_and_without_fast_decoders(tmp_path):
     trial = simulate_trial(seed=3, index=1)
     bag = write_trial_bag(trial=trial, path=tmp_path / 't', storage='ros1')

@@ -257,3 +257,24 @@ def test_configure_fails_cleanly(manager_factory, params, reason):
     # A user fixes the parameter and configures again, or shuts it down: it exits cleanly.
     assert m.node.trigger_shutdown() == TransitionCallbackReturn.SUCCESS
     assert m.state() == 'finalized'
+
+
+def test_ft_only_and_audio_fallback_configure_like_the_plain_node(manager_factory):
+    from contact_detector.detection.fallback import AudioFallback
+    # audio.enabled false: the shipped F/T-only model, and no audio subscription once active.
+    m = manager_factory(**{'model.path': '', 'audio.enabled': False})
+    assert m.transition(Transition.TRANSITION_CONFIGURE)
+    assert m.node.bundle.feature_config.ft_only
+    assert m.transition(Transition.TRANSITION_ACTIVATE)
+    m.spin_until(lambda: m.wrench_pub.get_subscription_count() == 1)
+    m.spin_for(0.2)
+    assert m.audio_pub.get_subscription_count() == 0 and m.node.audio_sub is None
+    values = {kv.key: kv.value for kv in m.node.diagnostics().status[0].values}
+    assert values['model_active'] == 'F/T-only' and values['audio'].startswith('off')
+    assert 'waiting for input: wrench' == m.node.diagnostics().status[0].message
+    # audio.timeout_s: the multimodal model with the F/T-only one standing by; cleanup drops it.
+    f = manager_factory(**{'audio.timeout_s': 0.5})
+    assert f.transition(Transition.TRANSITION_CONFIGURE)
+    assert isinstance(f.node.detector, AudioFallback) and f.node.ft_bundle is not None
+    assert f.transition(Transition.TRANSITION_CLEANUP)
+    assert f.node.ft_bundle is None and f.node.detector is None

@@ -315,7 +315,7 @@ def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
     for file in ('summary.md', 'metrics.json', 'trials.json', 'latency.png'):
         assert (report / file).is_file()
     assert (report / 'latency.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
-    detectors = ('forest',) + BASELINES
+    detectors = ('forest', 'forest-ft') + BASELINES       # forest-ft: the shipped F/T-only
     summary = (report / 'summary.md').read_text()
     table = [line for line in summary.splitlines() if line.startswith('| ')]
     for detector in detectors:

@@ -26,8 +26,10 @@ topics, the audio format and the F/T rate are found in each bag
 Writes one JSON object per line: for every audio frame
 ``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
 ``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's name, T the absolute
-bag time in seconds of the last audio sample the decision used. Each bag starts a fresh
-detector, armed. ``--params`` reads the node's YAML parameter file (the
+bag time in seconds of the last audio sample the decision used (of the last F/T sample with an
+F/T-only model). Each bag starts a fresh detector, armed. A recording without the audio topic
+is decided by the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the
+command prints which model it used. ``--params`` reads the node's YAML parameter file (the
 ``contact_detector_node: ros__parameters:`` section), so offline runs use the robot's settings;
 its ``audio.sample_rate`` serves bags that do not describe their audio, and ``--audio-rate``
 overrides both.
@@ -48,7 +50,8 @@ from contact_detector.io.bags import find_bags, manifest_entry
 from contact_detector.io.discovery import discover_streams, Streams, summary_lines
 from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
-from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
+from contact_detector.model.bundle import (DecisionRule, default_ft_model_path,
+                                           default_model_path, load_bundle, ModelBundle)
 from tqdm import tqdm
 
 
@@ -117,7 +120,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('bags', nargs='+', help='bag directories or folders of bags')
     parser.add_argument('--model', type=Path, default=None,
                         help='model bundle (default: model.path from --params, else the '
-                             'shipped model)')
+                             'shipped model; for a recording without the audio topic, or '
+                             'with audio.enabled false in --params, the shipped F/T-only '
+                             'model)')
     parser.add_argument('--params', type=Path, default=None, help='node parameter YAML')
     add_stream_arguments(parser)
     parser.add_argument('--out', type=Path, required=True, help='JSONL output file')
@@ -127,6 +132,88 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ContactDetectorError as err:
         print(f'contact-detector detect: {err}', file=sys.stderr)
         return 1
+
+
+class DetectorFactory:
+    """
+    Fresh detectors with the model a recording needs (each model file is loaded once).
+
+    ``model`` given (``--model`` or ``model.path``): always that model. Otherwise the shipped
+    multimodal model for recordings with an audio topic and the shipped F/T-only model for
+    recordings without one, or for every recording when ``audio_enabled`` is False (the node's
+    ``audio.enabled``).
+
+    Parameters
+    ----------
+    model : Path or None
+        Model file that overrides the choice.
+    audio_enabled : bool
+        False: use the F/T-only model even where there is audio.
+    settings : dict
+        :class:`DetectorSettings` fields (without the rule).
+    rule : dict or None
+        Decision rule fields that override each model's own rule.
+
+    """
+
+    def __init__(self, *, model: Optional[Path], audio_enabled: bool, settings: dict,
+                 rule: Optional[dict]) -> None:
+        self.model = model
+        self.audio_enabled = audio_enabled
+        self.settings = settings
+        self.rule = rule
+        self._loaded: dict = {}
+
+    def path_for(self, *, has_audio: bool = True) -> Path:
+        """Return the model file for a recording with (or without) an audio topic."""
+        if self.model is not None:
+            return self.model
+        if has_audio and self.audio_enabled:
+            return default_model_path()
+        return default_ft_model_path()
+
+    def bundle_for(self, *, has_audio: bool = True) -> ModelBundle:
+        """Return the loaded model for a recording with (or without) an audio topic."""
+        path = self.path_for(has_audio=has_audio)
+        if path not in self._loaded:
+            bundle = load_bundle(path=path)
+            settings = dict(self.settings)
+            if self.rule is not None:
+                base = bundle.decision_rule.to_dict()
+                base.update(self.rule)
+                settings['rule'] = DecisionRule.from_dict(base)
+            self._loaded[path] = (bundle, DetectorSettings(**settings))
+        return self._loaded[path][0]
+
+    def describe(self, *, has_audio: bool = True) -> str:
+        """``PATH (model id, F/T-only or audio + F/T)`` for the messages the tools print."""
+        bundle = self.bundle_for(has_audio=has_audio)
+        kind = 'F/T-only' if bundle.feature_config.ft_only else 'audio + F/T'
+        return f'{self.path_for(has_audio=has_audio)} ({bundle.model_id}, {kind})'
+
+    @property
+    def decides_without_audio(self) -> bool:
+        """Whether recordings without an audio topic get an F/T-only model."""
+        return self.bundle_for(has_audio=False).feature_config.ft_only
+
+    def __call__(self, streams: Optional[Streams] = None, *,
+                 has_audio: bool = True) -> ContactDetector:
+        """
+        Return a fresh, armed detector for a recording with (or without) audio.
+
+        Given a bag's :class:`Streams`, the recording has audio if it has an audio topic, and
+        the detector runs at that bag's audio and F/T rates.
+        """
+        if streams is not None:
+            has_audio = streams.has_audio
+        bundle = self.bundle_for(has_audio=has_audio)
+        settings = self._loaded[self.path_for(has_audio=has_audio)][1]
+        if streams is not None:
+            rates = {'wrench_rate': streams.wrench_rate}
+            if streams.audio_rate is not None:
+                rates['audio_rate'] = streams.audio_rate
+            settings = dataclasses.replace(settings, **rates)
+        return ContactDetector(bundle=bundle, settings=settings)
 
 
 def add_stream_arguments(parser: argparse.ArgumentParser) -> None:
@@ -145,9 +232,12 @@ def add_stream_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def discover_all(bags: Sequence[Path], *, args: argparse.Namespace, params: dict,
-                 prog: str) -> list:
+                 prog: str, allow_no_audio: bool = False) -> list:
     """
     Discover every bag's streams (flags override); print what was found; return the list.
+
+    ``allow_no_audio``: the caller decides recordings without an audio topic with an F/T-only
+    model, so such a bag is no error (its :class:`Streams` has ``audio_topic`` None).
 
     Returns
     -------
@@ -167,7 +257,7 @@ def discover_all(bags: Sequence[Path], *, args: argparse.Namespace, params: dict
             wrench_rate=getattr(args, 'wrench_rate', None),
             param_audio_rate=hint[0], param_source=hint[1],
             channels=int(params['audio.channels']) if 'audio.channels' in params else None,
-            coding=getattr(args, 'audio_coding', None))))
+            coding=getattr(args, 'audio_coding', None), allow_no_audio=allow_no_audio)))
     for line in summary_lines(found):
         print(f'{prog}: {line}')
     return found
@@ -191,20 +281,10 @@ def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path]
     """
     params = read_node_params(params_file) if params_file else {}
     settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
-    path = model or (Path(model_param) if model_param else default_model_path())
-    bundle = load_bundle(path=path)
-    if rule is not None:
-        base = bundle.decision_rule.to_dict()
-        base.update(rule)
-        settings['rule'] = DecisionRule.from_dict(base)
-    detector_settings = DetectorSettings(**settings)
-
-    def make(streams: Optional[Streams] = None) -> ContactDetector:
-        chosen = detector_settings
-        if streams is not None:
-            chosen = dataclasses.replace(chosen, audio_rate=streams.audio_rate,
-                                         wrench_rate=streams.wrench_rate)
-        return ContactDetector(bundle=bundle, settings=chosen)
+    path = model or (Path(model_param) if model_param else None)
+    make = DetectorFactory(model=path, audio_enabled=bool(params.get('audio.enabled', True)),
+                           settings=settings, rule=rule)
+    make.bundle_for(has_audio=True)         # a missing or bad model fails here, not per bag
     return make, stream
 
 
@@ -220,12 +300,19 @@ def _detect(args: argparse.Namespace) -> int:
                                           audio_rate=args.audio_rate)
     params = read_node_params(args.params) if args.params else {}
     found = discover_all(find_bags(args.bags), args=args, params=params,
-                         prog='contact-detector detect')
+                         prog='contact-detector detect',
+                         allow_no_audio=make.decides_without_audio)
     bags = [bag for bag, _ in found]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     frames = releases = 0
+    used = set()
     with args.out.open('w') as out:
         for bag, streams in tqdm(found, desc='detect', unit='bag', disable=len(bags) < 2):
+            if streams.has_audio not in used:
+                used.add(streams.has_audio)
+                where = 'with' if streams.has_audio else 'without'
+                print(f'model for recordings {where} an audio topic: '
+                      f'{make.describe(has_audio=streams.has_audio)}')
             run = detect_bag(bag=bag, make_detector=make, spec=stream_spec(streams, stream),
                              streams=streams)
             name = bag.name

@@ -15,8 +15,8 @@
 """
 ``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
 
-    contact-detector evaluate BAG_OR_DIR... [--detector forest|threshold|highpass|
-                              lowpass-bandpass|audio-onset|all ...] [--model M]
+    contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-ft|threshold|highpass|
+                              lowpass-bandpass|audio-onset|all ...] [--model M] [--ft-model M]
                               [--labels labels.csv] [--report DIR]
 
 Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), missed, late,
@@ -31,6 +31,9 @@ sees the same decoded messages. The per-recording table (printed with ``--labels
 detector's verdicts on each recording. With ``--report``: summary.md, metrics.json,
 per-trial rows, a latency histogram and ``recordings.png`` (each recording's labelled onsets
 and every detector's contact events on one time line).
+``forest`` is ``--model``, else the shipped model the recording needs (the F/T-only one for a
+recording without an audio topic); ``forest-ft`` the F/T-only model on every recording. The
+models used are printed.
 """
 
 import argparse
@@ -55,7 +58,10 @@ from contact_detector.model.training import read_labels_csv
 import numpy as np
 from tqdm import tqdm
 
-DETECTORS = ('forest',) + BASELINES
+#: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
+#: with an audio topic, F/T-only without); ``forest-ft``: the F/T-only model (``--ft-model``,
+#: else the shipped one) on every recording, for a comparison.
+DETECTORS = ('forest', 'forest-ft') + BASELINES
 #: recordings drawn in recordings.png at most
 MAX_FIGURE_RECORDINGS = 40
 
@@ -79,7 +85,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
              label_window: Optional[dict] = None,
              found: Optional[Dict[Path, Streams]] = None,
              stream: Optional[dict] = None,
-             labels: Optional[Dict[str, List[float]]] = None) -> Dict[str, dict]:
+             labels: Optional[Dict[str, List[float]]] = None,
+             make_ft=None) -> Dict[str, dict]:
     """
     Run every detector on every bag; return per-detector outcomes, summaries, frame reports.
 
@@ -87,6 +94,10 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
     ``stream`` holds the parameter file's stream fields (the audio channel); ``labels`` (bag
     name -> onsets, s, from :func:`read_labels_csv`) is the truth where given, every onset
     scored (:func:`score_onsets`).
+
+    ``make_forest(streams, has_audio=...)`` gives the ``forest`` detector of a recording with or
+    without an audio topic (:class:`contact_detector.cli.detect.DetectorFactory`);
+    ``make_ft(streams)`` the ``forest-ft`` one. The models used are printed once each.
 
     Returns
     -------
@@ -99,6 +110,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     recordings: Dict[str, dict] = {d: {} for d in detectors}
     y_true, y_pred = [], []
+    announced = set()
+    default_audio_rate = audio_rate
     for bag in tqdm(bags, desc='evaluate', unit='bag', disable=len(bags) < 3):
         streams = (found or {}).get(bag)
         if streams is not None:
@@ -108,10 +121,27 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
         onsets = (labels or {}).get(bag.name)
         truth = None if onsets else truth_for(bag, events, manifest)
         onsets = onsets or [truth.onset_t]
+        has_audio = streams.has_audio if streams is not None else True
         for name in detectors:
-            detector = ((make_forest(streams) if streams is not None else make_forest())
-                        if name == 'forest' else
-                        make_baseline(name, wrench_rate=wrench_rate, audio_rate=audio_rate))
+            if name == 'forest':
+                detector = (make_forest(streams) if streams is not None
+                            else make_forest(has_audio=has_audio))
+                key = (name, has_audio)
+            elif name == 'forest-ft':
+                detector = make_ft(streams) if streams is not None else make_ft()
+                key = (name, True)
+            else:
+                detector = make_baseline(name, wrench_rate=wrench_rate,
+                                         audio_rate=audio_rate or default_audio_rate)
+                key = None
+            if key is not None and key not in announced and hasattr(make_forest, 'describe'):
+                announced.add(key)
+                factory = make_forest if name == 'forest' else make_ft
+                where = 'with' if has_audio else 'without'
+                scope = (f'recordings {where} an audio topic' if name == 'forest'
+                         else 'every recording')
+                print(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}',
+                      file=sys.stderr)
             run = run_detector(events, detector=detector)
             if truth is None:
                 outcomes[name].extend(score_onsets(name=bag.name, condition='labels',
@@ -302,7 +332,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('bags', nargs='+')
     parser.add_argument('--detector', action='append', choices=DETECTORS + ('all',),
                         help='detector(s) to evaluate (repeatable; default forest)')
-    parser.add_argument('--model', type=Path, default=None)
+    parser.add_argument('--model', type=Path, default=None,
+                        help='model of the forest detector (default: the shipped model, or the '
+                             'shipped F/T-only model for recordings without the audio topic)')
+    parser.add_argument('--ft-model', type=Path, default=None,
+                        help='model of the forest-ft detector (default: the shipped F/T-only '
+                             'model)')
     parser.add_argument('--params', type=Path, default=None)
     add_stream_arguments(parser)
     parser.add_argument('--labels', type=Path, default=None,
@@ -317,8 +352,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                               audio_rate=args.audio_rate)
         probe = make()
         params = read_node_params(args.params) if args.params else {}
+        make_ft = None
+        if 'forest-ft' in detectors:
+            make_ft, _ = build_detector_factory(model=args.ft_model, params_file=args.params,
+                                                audio_rate=args.audio_rate)
+            make_ft.model, make_ft.audio_enabled = args.ft_model, False
+            make_ft.bundle_for(has_audio=False)
+        # A bag without an audio topic is no error if the forest gets an F/T-only model for it.
         found = dict(discover_all(find_bags(args.bags), args=args, params=params,
-                                  prog='contact-detector evaluate'))
+                                  prog='contact-detector evaluate',
+                                  allow_no_audio=make.decides_without_audio))
         labels = read_labels_csv(args.labels) if args.labels else None
         if labels is not None:
             missing = [b.name for b in found if b.name not in labels]
@@ -329,7 +372,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,
                            label_window=probe.bundle.label_window, found=found,
-                           stream=stream, labels=labels)
+                           stream=stream, labels=labels, make_ft=make_ft)
     except ContactDetectorError as err:
         print(f'contact-detector evaluate: {err}', file=sys.stderr)
         return 1

@@ -44,7 +44,7 @@ from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError, ContactDetectorError
 from contact_detector.evaluation.metrics import score_onsets, score_trial, summarize, Truth
 from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VERSION,
-                                              FeatureConfig)
+                                              FeatureConfig, SHIFT_FEATURES)
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
@@ -82,6 +82,12 @@ DEFAULT_FEATURES = FeatureConfig(ft_window=64, ft_hop=1, ft_detrend='mean',
                                                  'force_shift', 'torque_shift',
                                                  'force_shift_min', 'torque_shift_min',
                                                  'force_shift_max', 'torque_shift_max'))
+#: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
+#: do not depend on the sensor's orientation, tare or sign convention (docs/offline.md,
+#: "Robots without a microphone").
+DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES
+#: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
+NO_AUDIO_RATE = 16000
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
 DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.3)
@@ -114,9 +120,14 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
-    parser.add_argument('--extra-features', default=','.join(d.extra_features),
+    parser.add_argument('--extra-features', default=None,
                         help='comma-separated extra features, from '
-                             f"{', '.join(EXTRA_FEATURES)}")
+                             f"{', '.join(EXTRA_FEATURES)} (default "
+                             f"{','.join(d.extra_features)}; with --no-audio "
+                             f"{','.join(DEFAULT_FT_ONLY_EXTRA)})")
+    parser.add_argument('--no-audio', action='store_true',
+                        help='an F/T-only model (robots without a microphone): no audio '
+                             'column, one frame per F/T feature frame')
     parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
                         help='label window start after the onset, s')
     parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
@@ -164,8 +175,12 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     """Build the FeatureConfig from parsed options."""
-    extra = tuple(e for e in args.extra_features.split(',') if e)
-    return FeatureConfig(ft_window=args.ft_window, ft_hop=args.ft_hop,
+    no_audio = bool(getattr(args, 'no_audio', False))
+    if args.extra_features is None:
+        extra = DEFAULT_FT_ONLY_EXTRA if no_audio else DEFAULT_FEATURES.extra_features
+    else:
+        extra = tuple(e for e in args.extra_features.split(',') if e)
+    return FeatureConfig(audio=not no_audio, ft_window=args.ft_window, ft_hop=args.ft_hop,
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,
@@ -260,7 +275,8 @@ def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec
         streams = (found or {}).get(bag)
         if streams is not None:
             spec = stream_spec(streams, {})
-            audio_rate, wrench_rate = streams.audio_rate, streams.wrench_rate
+            audio_rate = streams.audio_rate or NO_AUDIO_RATE
+            wrench_rate = streams.wrench_rate
         events = load_events(bag, spec=spec)
         detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
             audio_rate=audio_rate, wrench_rate=wrench_rate))
@@ -390,8 +406,10 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
     rule = rule_from_args(args)
+    # An F/T-only model (--no-audio) trains on recordings without an audio topic too.
     found: dict[Path, Streams] = dict(discover_all(find_bags(args.bags), args=args, params={},
-                                                   prog='contact-detector train'))
+                                                   prog='contact-detector train',
+                                                   allow_no_audio=config.ft_only))
     user_bags = list(found)
     csv_onsets = read_labels_csv(args.labels) if args.labels else None
     if csv_onsets is not None:
@@ -406,7 +424,8 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     sim_bags, sim_settings = [], {}
     if args.with_sim:
         ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))
-        audio_rate = int(max(found.values(), key=lambda s: s.audio_rate).audio_rate)
+        audio_rate = int(max([s.audio_rate for s in found.values() if s.has_audio],
+                             default=NO_AUDIO_RATE))
         print(f'contact-detector train: {args.with_sim} simulated trials of '
               f'{", ".join(SIM_CONDITIONS)} at {ft_rate:g} Hz F/T, {audio_rate} Hz audio')
         sim_bags, sim_settings = simulated_trials(sim_dir=sim_dir, n=args.with_sim,
@@ -427,7 +446,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     def one(bag):
         streams = found[bag]
         return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
-                              audio_rate=streams.audio_rate,
+                              audio_rate=streams.audio_rate or NO_AUDIO_RATE,
                               wrench_rate=streams.wrench_rate, label_window=labels,
                               onsets=csv_onsets[bag.name] if csv_onsets and bag in user
                               else None,

@@ -69,6 +69,8 @@ class BlockFeatures:
         emitted by the final flush.
     audio_msgs, wrench_msgs, clipped : int
         Messages pushed, and audio chunks at full scale.
+    audio_ignored : int
+        Audio messages (sound or refused) an F/T-only extractor ignored.
 
     """
 
@@ -77,6 +79,7 @@ class BlockFeatures:
     audio_msgs: int
     wrench_msgs: int
     clipped: int
+    audio_ignored: int = 0
 
 
 def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[Decisions]:
@@ -113,6 +116,7 @@ def run_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[De
     detector.counts['audio_msgs'] += got.audio_msgs
     detector.counts['wrench_msgs'] += got.wrench_msgs
     detector.counts['audio_clipped'] += got.clipped
+    detector.counts['audio_ignored'] += got.audio_ignored
     return detector.decide(got.frames, now=got.now)
 
 
@@ -143,10 +147,13 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
     ex = extractor
     if ex.pending or ex.audio.latest_time is not None or ex.ft.last_input_t is not None:
         return None
-    scan = _scan(events, rate=rate_check, gap=ex.ft.gap_reset_s, skip_bad=skip_bad)
+    scan = _scan(events, rate=None if ex.ft_only else rate_check, gap=ex.ft.gap_reset_s,
+                 skip_bad=skip_bad, audio=not ex.ft_only)
     if scan is None:
         return None
-    (nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg) = scan
+    if ex.ft_only:
+        return _ft_only_features(scan, extractor=ex)
+    (nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg, _) = scan
     framer, fs = ex.audio, ex.audio.sample_rate
     n_events = nows.size
 
@@ -223,13 +230,42 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
                          clipped=clipped)
 
 
+def _ft_only_features(scan: tuple, *, extractor: StreamingFeatureExtractor) -> BlockFeatures:
+    """Every row of an F/T-only extractor: one per F/T feature frame, emitted by its sample."""
+    (nows, audio_idx, _, _, wrench_idx, wt, wforce, wtorque, per_msg, ignored) = scan
+    ex = extractor
+    if wt.size:
+        ft_t, ft_x = ex.ft.push(t=wt, force=wforce, torque=wtorque)
+    else:
+        ft_t, ft_x = np.zeros(0), np.zeros((0, len(ex.ft.columns)))
+    frames = ex.ft_rows(ft_t, ft_x)
+    if not len(frames):
+        frames = FeatureFrames.empty(ex.names)
+    sample_event = np.repeat(wrench_idx, per_msg)
+    now = (nows[sample_event[np.searchsorted(wt, ft_t)]] if ft_t.size else np.zeros(0))
+    return BlockFeatures(frames=frames, now=now, audio_msgs=int(audio_idx.size),
+                         wrench_msgs=int(wrench_idx.size), clipped=0, audio_ignored=ignored)
+
+
 def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
-          skip_bad: bool) -> Optional[tuple]:
-    """Split the messages by kind, repeating the live per-message checks; None if not clean."""
+          skip_bad: bool, audio: bool = True) -> Optional[tuple]:
+    """
+    Split the messages by kind, repeating the live per-message checks; None if not clean.
+
+    ``audio`` False (an F/T-only extractor): audio messages, sound or refused, are not pushed
+    and not checked; the last element of the tuple counts them.
+    """
     nows = []
     audio_idx, chunks, stamps = [], [], []
     wrench_idx, wt, wforce, wtorque, per_msg = [], [], [], [], []
+    ignored = 0
     for event in events:
+        if not audio and (isinstance(event, AudioEvent)
+                          or (isinstance(event, BadEvent) and event.kind == 'audio')):
+            ignored += 1
+            if isinstance(event, AudioEvent):
+                audio_idx.append(-1)        # counted as a message, never pushed
+            continue
         if isinstance(event, AudioEvent):
             stamp = event.stamp
             try:
@@ -274,7 +310,7 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
     return (np.array(nows, dtype=np.float64),
             np.array(audio_idx, dtype=np.intp), chunks, np.array(stamps, dtype=np.float64),
             np.array(wrench_idx, dtype=np.intp), t, force, torque,
-            np.array(per_msg, dtype=np.intp))
+            np.array(per_msg, dtype=np.intp), ignored)
 
 
 def _anchors(*, sizes: np.ndarray, stamps: np.ndarray, framer) -> Optional[np.ndarray]:

@@ -211,6 +211,11 @@ class ContactDetector:
     """
     Contact decisions and releases from audio chunks and wrench samples.
 
+    With an F/T-only model (``bundle.feature_config.ft_only``) every F/T feature frame is
+    decided (frames are clocked by the wrench stream at the model's feature rate), with the
+    same release logic, warm-up, staleness, hold-off and time-jump handling; audio chunks,
+    sound or corrupt, are then ignored and counted in ``audio_ignored``, never an error.
+
     Parameters
     ----------
     bundle : ModelBundle
@@ -223,11 +228,12 @@ class ContactDetector:
     COUNTERS = ('audio_msgs', 'wrench_msgs', 'audio_dropped', 'wrench_dropped', 'time_jumps',
                 'frames', 'invalid_frames', 'stale_frames', 'events', 'releases',
                 'audio_restarts', 'wrench_restarts', 'audio_rate_mismatch', 'nonfinite_frames',
-                'audio_clipped')
+                'audio_clipped', 'audio_ignored')
 
     def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
         self.bundle = bundle
         self.settings = settings
+        self.ft_only = bundle.feature_config.ft_only
         self.rule = settings.rule or bundle.decision_rule
         try:
             self.forest = bundle.compile()
@@ -284,6 +290,9 @@ class ContactDetector:
         jump resets everything first.
         """
         self.counts['audio_msgs'] += 1
+        if self.ft_only:
+            self.counts['audio_ignored'] += 1
+            return Decisions.empty()
         try:
             unit = to_unit_audio(samples)
             self._check_rate(unit.shape[0], stamp)
@@ -376,8 +385,12 @@ class ContactDetector:
         Callers that reject a message before it reaches the detector (a message adapter) call
         this too, so every drop is counted and blocks releases for ``corrupt_holdoff_s``. A
         dropped audio chunk restarts the audio stream, so the samples on either side of the hole
-        are never joined into one frame.
+        are never joined into one frame. An F/T-only detector ignores audio, corrupt or not: it
+        only counts it in ``audio_ignored``.
         """
+        if kind == 'audio' and self.ft_only:
+            self.counts['audio_ignored'] += 1
+            return Decisions.empty()
         self.counts[f'{kind}_dropped'] += 1
         if kind == 'audio':
             self.extractor.audio.reset()

@@ -192,7 +192,8 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
 
     Each audio frame ending at ``t_a`` takes the newest F/T feature frame ending at or before
     ``t_a``; the row is invalid (zeros in the F/T columns) if there is none or it is older than
-    ``max_ft_age_s`` (default ``ft_hop / ft_rate_hz + 0.05``).
+    ``max_ft_age_s`` (default ``ft_hop / ft_rate_hz + 0.05``). With an F/T-only configuration
+    (``config.audio`` False) every F/T feature frame is one valid row and the audio is unused.
 
     Parameters
     ----------
@@ -219,6 +220,16 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
 
     """
     names = config.feature_names
+    if config.ft_only:
+        ft_times, ft_x, columns = batch_ft_features(config=config, ft_t=np.asarray(ft_t),
+                                                    force=np.asarray(force),
+                                                    torque=np.asarray(torque),
+                                                    ft_input_rate=ft_input_rate)
+        x = np.zeros((ft_times.size, len(names)))
+        for j, name in enumerate(columns):
+            x[:, names.index(name)] = ft_x[:, j]
+        return FeatureFrames(t=ft_times, x=x, valid=np.ones(ft_times.size, dtype=bool),
+                             names=names)
     t_a, power = batch_audio_power(config=config, audio=audio, audio_rate=audio_rate,
                                    audio_t0=audio_t0)
     ft_times, ft_x, columns = batch_ft_features(config=config, ft_t=np.asarray(ft_t),

@@ -163,6 +163,10 @@ class FeatureConfig:
         ending ``shift_lag`` samples before the newest. Longer than the ``*_change`` baseline,
         so that a load transfer of up to about ``(shift_lag + shift_window) / ft_rate_hz`` s is
         seen whole.
+    audio : bool
+        Whether the vector has audio columns. False: no ``audio_power`` column and no audio
+        extra feature (refused); rows are then clocked by the F/T feature frames, one row per
+        F/T feature frame, for robots without a microphone.
 
     """
 
@@ -184,6 +188,7 @@ class FeatureConfig:
     shift_min_frames: int = 10
     shift_lag: int = 20
     shift_window: int = 40
+    audio: bool = True
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -214,16 +219,28 @@ class FeatureConfig:
         if unknown or len(set(self.extra_features)) != len(self.extra_features):
             raise ConfigError(f'FeatureConfig.extra_features must be distinct names from '
                               f'{EXTRA_FEATURES}, got {self.extra_features!r}')
+        if not isinstance(self.audio, bool):
+            raise ConfigError(f'FeatureConfig.audio must be true or false, got {self.audio!r}')
+        audio_extra = [n for n in self.extra_features if n in AUDIO_FEATURES]
+        if not self.audio and audio_extra:
+            raise ConfigError(f'FeatureConfig.audio is false (an F/T-only model) but '
+                              f'extra_features has the audio features {audio_extra}')
 
     @property
     def feature_names(self) -> tuple:
-        """Names of the feature vector's columns, in order."""
-        return PAPER_FEATURES + self.extra_features
+        """Names of the feature vector's columns, in order (no ``audio_power`` if F/T-only)."""
+        paper = PAPER_FEATURES if self.audio else PAPER_FEATURES[1:]
+        return paper + self.extra_features
 
     @property
     def n_features(self) -> int:
         """Length of the feature vector."""
         return len(self.feature_names)
+
+    @property
+    def ft_only(self) -> bool:
+        """Return True when no column comes from the audio (frames clocked by the F/T stream)."""
+        return not self.audio
 
     def audio_frame_samples(self, sample_rate: float) -> int:
         """
@@ -237,6 +254,9 @@ class FeatureConfig:
         """Plain-JSON form, stored in model bundles and cards."""
         data = asdict(self)
         data['extra_features'] = list(self.extra_features)
+        if self.audio:
+            # Configs written before the field existed, and their model hashes, stay the same.
+            del data['audio']
         return data
 
     @classmethod

@@ -835,6 +835,11 @@ class StreamingFeatureExtractor:
     waiting for F/T longer than ``max_ft_wait_s`` of audio time are emitted invalid-or-aligned
     with what is there, so a dead F/T sensor cannot stall the output.
 
+    With an F/T-only configuration (``config.audio`` False) the rows are clocked by the F/T
+    stream instead: every F/T feature frame is one row, emitted by the wrench sample that
+    completes it, at that sample's time, always valid (its features are fresh by
+    construction). Audio chunks are then ignored (:attr:`ignored_audio` counts them).
+
     Parameters
     ----------
     config : FeatureConfig
@@ -862,6 +867,8 @@ class StreamingFeatureExtractor:
                  ft_gap_reset_s: float = 0.05, audio_gap_tolerance_s: float = 0.2) -> None:
         self.config = config
         self.names = config.feature_names
+        self.ft_only = config.ft_only
+        self.ignored_audio = 0
         self.audio = AudioFramer(config=config, sample_rate=audio_rate,
                                  gap_tolerance_s=audio_gap_tolerance_s)
         self.ft = ForceTorqueStream(config=config,
@@ -941,6 +948,9 @@ class StreamingFeatureExtractor:
             Time of the chunk's last sample, seconds.
 
         """
+        if self.ft_only:
+            self.ignored_audio += 1
+            return self._empty
         t, power = self.audio.push(unit, stamp=stamp)
         if t.size:
             self._pend_a.extend(self.audio_rows(power))
@@ -1028,6 +1038,8 @@ class StreamingFeatureExtractor:
                 and np.all(np.isfinite(torque))):
             raise InputError('wrench contains NaN or Inf')
         ft_t, ft_x = self.ft.push(t=t, force=force, torque=torque)
+        if self.ft_only:
+            return self.ft_rows(ft_t, ft_x)
         if ft_t.size:
             keep = self.history_frames
             self._ft_ts.extend(ft_t[-keep:])
@@ -1066,11 +1078,39 @@ class StreamingFeatureExtractor:
         if not (isfinite(t) and all(map(isfinite, values))):
             raise InputError('wrench contains NaN or Inf')
         frame = self.ft.push_one(t=t, values=values)
+        if self.ft_only:
+            if frame is None:
+                return self._empty
+            return self.ft_rows(np.array([frame[0]]), np.array([frame[1]]))
         if frame is not None:
             self._ft_ts.append(frame[0])
             self._ft_xs.append(frame[1])
             self._trim_ft_history()
         return self._drain(force=False)
+
+    def ft_rows(self, ft_t: np.ndarray, ft_x: np.ndarray) -> FeatureFrames:
+        """
+        Rows of an F/T-only configuration: one per F/T feature frame, all valid.
+
+        Parameters
+        ----------
+        ft_t : np.ndarray, shape (m,)
+            Time of each F/T feature frame's last sample, seconds.
+        ft_x : np.ndarray, shape (m, len(self.ft.columns))
+            Their features (:class:`ForceTorqueStream` columns).
+
+        Returns
+        -------
+        FeatureFrames
+            ``m`` rows in the order of :attr:`names`.
+
+        """
+        m = ft_t.shape[0]
+        if m == 0:
+            return self._empty
+        x = np.zeros((m, len(self.names)))
+        x[:, self._ft_dst] = ft_x[:, self._ft_col]
+        return FeatureFrames(t=ft_t, x=x, valid=np.ones(m, dtype=bool), names=self.names)
 
     def _trim_ft_history(self) -> None:
         # Keep history_s of F/T feature frames; _ft_t/_ft_x are the kept rows, for _drain.

@@ -23,6 +23,8 @@ Find a bag's sensor topics, audio format and F/T rate, so offline commands need 
   ``AudioInfo``, the mp3 frame headers when its bytes are mp3 (:func:`sniff_mp3`); the
   node's parameter file; else an estimate: samples per second of recording (bag log) time,
   snapped to the nearest standard rate (:data:`STANDARD_AUDIO_RATES`), with a warning.
+* No audio topic: an error, unless the caller can decide without audio (``allow_no_audio``,
+  an F/T-only model): the bag's :class:`Streams` then has ``audio_topic`` None.
 * F/T rate: the command's flag, else the mean period of the regular steps of the header stamps
   (:func:`measure_wrench_rate`).
 
@@ -68,15 +70,17 @@ class Streams:
 
     Attributes
     ----------
-    wrench_topic, audio_topic : str
-        Topic names.
+    wrench_topic : str
+        Topic name.
+    audio_topic : str or None
+        Topic name; None: the bag has no audio topic (only an F/T-only model decides it).
     audio_msg_type : str
-        ``pkg/msg/Type`` of the audio topic.
-    audio_rate : float
-        Audio sample rate, Hz.
+        ``pkg/msg/Type`` of the audio topic ('' without one).
+    audio_rate : float or None
+        Audio sample rate, Hz (None without an audio topic).
     audio_rate_source : str
         Where it comes from: ``flag``, ``AudioInfo``, ``AudioStamped``, ``mp3 header``,
-        ``parameters`` or ``estimated``.
+        ``parameters`` or ``estimated`` ('' without an audio topic).
     channels : int
         Interleaved audio channels.
     coding : str
@@ -91,9 +95,9 @@ class Streams:
     """
 
     wrench_topic: str
-    audio_topic: str
+    audio_topic: Optional[str]
     audio_msg_type: str
-    audio_rate: float
+    audio_rate: Optional[float]
     audio_rate_source: str
     channels: int
     coding: str
@@ -101,8 +105,16 @@ class Streams:
     wrench_rate_source: str
     warnings: tuple = ()
 
+    @property
+    def has_audio(self) -> bool:
+        """Whether the bag has an audio topic."""
+        return self.audio_topic is not None
+
     def describe(self) -> str:
         """One line: topics, audio format and F/T rate, with their sources."""
+        if not self.has_audio:
+            return (f'wrench {self.wrench_topic} at {self.wrench_rate:.4g} Hz '
+                    f'({self.wrench_rate_source}); no audio topic')
         coding = ', mp3' if self.coding == 'mp3' else ''
         return (f'wrench {self.wrench_topic} at {self.wrench_rate:.4g} Hz '
                 f'({self.wrench_rate_source}); audio {self.audio_topic} '
@@ -241,7 +253,7 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
                      audio_rate: Optional[float] = None, wrench_rate: Optional[float] = None,
                      param_audio_rate: Optional[float] = None,
                      param_source: str = 'parameters', channels: Optional[int] = None,
-                     coding: Optional[str] = None) -> Streams:
+                     coding: Optional[str] = None, allow_no_audio: bool = False) -> Streams:
     """
     Find the topics and formats of one bag; arguments that are given override what is found.
 
@@ -265,11 +277,15 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
     coding : str or None
         ``pcm`` or ``mp3`` (flag); None = from AudioInfo, else from the bytes of AudioData
         (mp3 frame headers), else ``pcm``.
+    allow_no_audio : bool
+        True (the caller can use an F/T-only model): a bag without any audio topic, and no
+        ``audio_topic`` given, yields ``Streams`` with ``audio_topic`` None instead of an error.
 
     Raises
     ------
     BagError
-        A topic is missing or ambiguous, or a rate can be neither read nor measured.
+        A topic is missing (the audio topic: unless ``allow_no_audio``) or ambiguous, or a
+        rate can be neither read nor measured.
 
     """
     path = Path(path)
@@ -277,6 +293,15 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
     wanted_audio = normalise_msg_type(audio_msg_type) if audio_msg_type else None
     w_topic = _pick(path, types, lambda m: m == WRENCH_TYPE, 'geometry_msgs/WrenchStamped',
                     '--wrench-topic', wrench_topic)
+    if allow_no_audio and not audio_topic and not any(m in AUDIO_MSG_TYPES
+                                                      for m in types.values()):
+        stamps = [] if wrench_rate else probe(path, wrench_topic=w_topic)[0]
+        w_rate = (float(wrench_rate) if wrench_rate else
+                  measure_wrench_rate(stamps=stamps, path=path, topic=w_topic))
+        return Streams(wrench_topic=w_topic, audio_topic=None, audio_msg_type='',
+                       audio_rate=None, audio_rate_source='', channels=channels or 1,
+                       coding='pcm', wrench_rate=w_rate,
+                       wrench_rate_source='flag' if wrench_rate else 'stamps')
     a_topic = _pick(path, types,
                     lambda m: m == wanted_audio if wanted_audio else m in AUDIO_MSG_TYPES,
                     f'audio {wanted_audio} (audio.msg_type)' if wanted_audio else

@@ -138,7 +138,7 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
     if spec.coding == 'mp3':
         yield from _mp3_events(Path(path), spec=spec)
         return
-    topics = [spec.wrench_topic, spec.audio_topic, spec.truth_topic]
+    topics = [t for t in (spec.wrench_topic, spec.audio_topic, spec.truth_topic) if t]
     for message in iter_messages(Path(path), topics=topics, decoders=FAST_DECODERS):
         now = message.log_time_ns * 1e-9
         if message.topic == spec.audio_topic and spec.audio_msg_type \

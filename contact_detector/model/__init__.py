@@ -16,6 +16,7 @@
 
 from contact_detector.model.bundle import (
     DecisionRule,
+    default_ft_model_path,
     default_model_path,
     load_bundle,
     ModelBundle,
@@ -30,6 +31,7 @@ __all__ = [
     'DecisionRule',
     'ForestArrays',
     'ModelBundle',
+    'default_ft_model_path',
     'default_model_path',
     'load_bundle',
     'runtime_versions',

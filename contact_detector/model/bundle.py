@@ -62,6 +62,8 @@ PAYLOAD_VERSION = 1
 CARD_VERSION = 1
 #: File name of the shipped model (in ``<share>/contact_detector/models/``).
 DEFAULT_MODEL_NAME = 'contact_forest.npz'
+#: File name of the shipped F/T-only model (robots without a microphone), beside it.
+FT_ONLY_MODEL_NAME = 'contact_forest_ft.npz'
 FORMATS = {'.npz': 'npz', '.joblib': 'joblib', '.skops': 'skops'}
 #: Formats whose forest is a pickled/serialised scikit-learn object (loaded through sklearn).
 SKLEARN_FORMATS = ('joblib', 'skops')
@@ -393,9 +395,10 @@ class ModelBundle:
 
         E.g. ``rf8-paper7-3fa2c1d09b``, or ``rf8-paper7+force_delta-...`` with extra features.
         The hash is :attr:`forest_sha256`, so the npz, joblib and skops files of one forest
-        share the id.
+        share the id. An F/T-only model's set starts with ``ft6`` (the paper's six F/T columns).
         """
-        feature_set = '+'.join(('paper7',) + tuple(self.feature_config.extra_features))
+        base = 'ft6' if self.feature_config.ft_only else 'paper7'
+        feature_set = '+'.join((base,) + tuple(self.feature_config.extra_features))
         return f'rf{self.n_estimators}-{feature_set}-{self.forest_sha256[:10]}'
 
     def metadata(self) -> dict:
@@ -939,3 +942,18 @@ def default_model_path() -> Path:
 
     """
     return find_model(dirs=_model_dirs())
+
+
+def default_ft_model_path() -> Path:
+    """
+    Path of the shipped F/T-only model ``models/contact_forest_ft.npz``.
+
+    Searched where :func:`default_model_path` searches.
+
+    Raises
+    ------
+    ModelError
+        If no shipped F/T-only model exists.
+
+    """
+    return find_model(name=FT_ONLY_MODEL_NAME, dirs=_model_dirs())

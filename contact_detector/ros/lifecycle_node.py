@@ -74,6 +74,7 @@ class ContactDetectorLifecycleNode(DetectorWiring, LifecycleNode):
     def __init__(self, node_name: str = 'contact_detector', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         self.bundle = None
+        self.ft_bundle = None
         self.detector = None
         self.config = None
         self.diagnostics_timer = None
@@ -134,7 +135,7 @@ class ContactDetectorLifecycleNode(DetectorWiring, LifecycleNode):
         return super().on_shutdown(state)
 
     def _unload(self) -> None:
-        self.bundle = self.detector = self.config = None
+        self.bundle = self.ft_bundle = self.detector = self.config = None
 
 
 def main(args: Optional[list] = None) -> int:

@@ -24,10 +24,12 @@ Interface (all names relative, remappable)::
 
     subscribes  wrist_wrench         geometry_msgs/msg/WrenchStamped   sensor-data QoS
                 audio                audio.msg_type                    sensor-data QoS
+                                     (not with an F/T-only model)
                 audio_info           audio_common_msgs/msg/AudioInfo   transient local
                                      (ros-drivers audio_common types only)
-    publishes   contact              std_msgs/msg/Bool      one per audio frame
-                contact_probability  std_msgs/msg/Float32   one per audio frame
+    publishes   contact              std_msgs/msg/Bool      one per frame (audio frame, or
+                                                            F/T frame with an F/T-only model)
+                contact_probability  std_msgs/msg/Float32   one per frame
                 release              std_msgs/msg/Bool      True once per event while armed
                 /diagnostics         diagnostic_msgs/msg/DiagnosticArray
                 gripper.topic        trajectory_msgs/msg/JointTrajectory (gripper.enabled)
@@ -48,6 +50,7 @@ import time
 from typing import Any, Callable, Dict, Optional
 
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
+from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
 from contact_detector.features.resample import rate_mismatch, StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
@@ -55,7 +58,8 @@ from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
                                           AudioFormat, AudioMsgType, check_audio_info, check_stamp,
                                           embedded_audio_format, wrench_sample)
-from contact_detector.model.bundle import default_model_path, load_bundle, ModelBundle
+from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
+                                           load_bundle, ModelBundle)
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
@@ -200,12 +204,22 @@ class DetectorWiring:
         cfg = self.config
         self.audio_spec, audio_class, info_class = import_audio_types(cfg.audio_msg_type)
         if bundle is None:
-            path = cfg.model_path or str(default_model_path())
+            path = cfg.model_path or str(default_model_path() if cfg.audio_enabled
+                                         else default_ft_model_path())
             bundle = load_bundle(path=path)
             self.model_path = path
         else:
             self.model_path = '(given)'
+        if not cfg.audio_enabled and not bundle.feature_config.ft_only:
+            raise ConfigError(f'audio.enabled is false but model {bundle.model_id} '
+                              f'({self.model_path}) uses audio features: give an F/T-only '
+                              'model.path, or leave it empty for the shipped F/T-only model')
         self.bundle = bundle
+        # An F/T-only model: no audio subscription, frames are clocked by the wrench stream.
+        self.use_audio = not bundle.feature_config.ft_only
+        # audio.timeout_s: the F/T-only model stands in while the audio is silent.
+        self.ft_bundle = (load_bundle(path=default_ft_model_path())
+                          if self.use_audio and cfg.audio_timeout_s > 0 else None)
         self._audio_class, self._info_class = audio_class, info_class
         self.counts = dict.fromkeys(NODE_COUNTERS, 0)
         self._count_base: Dict[str, int] = {}
@@ -270,11 +284,11 @@ class DetectorWiring:
         self._read_audio = FAST_DECODERS.get(cfg.audio_msg_type)
         self.wrench_sub = self.create_subscription(WrenchStamped, 'wrist_wrench',
                                                    self._on_wrench, input_qos, raw=True)
-        self.audio_sub = self.create_subscription(
-            self._audio_class, 'audio', self._on_audio, input_qos,
-            raw=self._read_audio is not None)
+        self.audio_sub = (self.create_subscription(self._audio_class, 'audio', self._on_audio,
+                                                   input_qos, raw=self._read_audio is not None)
+                          if self.use_audio else None)
         self.info_sub = None
-        if self._info_class is not None:
+        if self._info_class is not None and self.use_audio:
             info_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                                   reliability=ReliabilityPolicy.RELIABLE,
                                   durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -287,8 +301,8 @@ class DetectorWiring:
                 nanoseconds=-int(CLOCK_JUMP_RESET_S * 1e9))),
             post_callback=self._on_clock_jump)
         # Said once; /diagnostics says it every period until an input arrives.
-        self.get_logger().info(f'waiting for input on {self.wrench_sub.topic_name} and '
-                               f'{self.audio_sub.topic_name}')
+        inputs = [sub.topic_name for sub in (self.wrench_sub, self.audio_sub) if sub is not None]
+        self.get_logger().info(f'waiting for input on {" and ".join(inputs)}')
 
     def _destroy_inputs(self) -> None:
         """Destroy what :meth:`_create_inputs` made."""
@@ -304,25 +318,37 @@ class DetectorWiring:
         cfg, rule = self.config, self.detector.rule
         self.get_logger().info(
             f'model {self.bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
-            f'audio {cfg.audio_msg_type} {self._format_text()}; wrench {cfg.wrench_rate:g} Hz; '
+            f'audio {self._audio_text()}; wrench {cfg.wrench_rate:g} Hz; '
             f'release {"armed" if self.detector.armed else "disarmed"}')
 
-    def _settings(self, *, rate: float, armed: bool) -> DetectorSettings:
+    def _settings(self, *, rate: float, armed: bool,
+                  bundle: Optional[ModelBundle] = None) -> DetectorSettings:
         cfg = self.config
         return DetectorSettings(
             audio_rate=rate, wrench_rate=cfg.wrench_rate, max_ft_age_s=cfg.max_ft_age_s,
             max_ft_wait_s=cfg.max_ft_wait_s, max_input_delay_s=cfg.max_input_delay_s,
             warmup_s=cfg.warmup_s, corrupt_holdoff_s=cfg.corrupt_holdoff_s, armed_on_start=armed,
-            rule=cfg.rule(self.bundle.decision_rule))
+            rule=cfg.rule((bundle or self.bundle).decision_rule))
 
-    def _build_detector(self, *, rate: float, armed: bool) -> ContactDetector:
+    def _build_detector(self, *, rate: float, armed: bool):
         try:
-            return ContactDetector(bundle=self.bundle,
-                                   settings=self._settings(rate=rate, armed=armed))
+            detector = ContactDetector(bundle=self.bundle,
+                                       settings=self._settings(rate=rate, armed=armed))
+            if self.ft_bundle is None:
+                return detector
+            fallback = ContactDetector(bundle=self.ft_bundle, settings=self._settings(
+                rate=rate, armed=False, bundle=self.ft_bundle))
+            return AudioFallback(primary=detector, fallback=fallback,
+                                 timeout_s=self.config.audio_timeout_s)
         except ConfigError as err:
             raise ConfigError(f'cannot run model {self.bundle.model_id} with audio at {rate:g} '
                               f'Hz and wrench.rate={self.config.wrench_rate:g} Hz: {err}'
                               ) from err
+
+    def _audio_text(self) -> str:
+        if not self.use_audio:
+            return 'off (F/T-only model: no audio subscription, one frame per F/T frame)'
+        return f'{self.config.audio_msg_type} {self._format_text()}'
 
     def _format_text(self) -> str:
         fmt, channel = self.audio_format, self.config.audio_channel
@@ -371,7 +397,7 @@ class DetectorWiring:
 
     def wrench_wanted(self) -> bool:
         """Whether an audio frame waits for F/T data (the executor then wakes for wrench)."""
-        return self.detector.extractor.pending > 0
+        return not self.use_audio or self.detector.extractor.pending > 0
 
     def latency_samples(self, kind: str = 'audio') -> np.ndarray:
         """
@@ -512,6 +538,11 @@ class DetectorWiring:
         if jumps != self._time_jumps_seen:
             self._time_jumps_seen = jumps
             self.get_logger().warning(f'{self.detector.last_error}; warming up again')
+        switches = getattr(self.detector, 'switch_messages', None)
+        if switches:
+            for line in switches:
+                self.get_logger().info(line)
+            switches.clear()
         n = len(decisions)
         if n == 0:
             return
@@ -604,11 +635,14 @@ class DetectorWiring:
                 or self.bundle is None:         # configure reads the parameters
             return
         old, self.config = self.config, new
-        det = self.detector
-        det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
-                               warmup_s=new.warmup_s, corrupt_holdoff_s=new.corrupt_holdoff_s,
-                               rule=new.rule(self.bundle.decision_rule))
-        det.set_rule(det.settings.rule)
+        pairs = ([(self.detector.primary, self.bundle), (self.detector.fallback, self.ft_bundle)]
+                 if isinstance(self.detector, AudioFallback) else [(self.detector, self.bundle)])
+        for det, bundle in pairs:
+            det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
+                                   warmup_s=new.warmup_s,
+                                   corrupt_holdoff_s=new.corrupt_holdoff_s,
+                                   rule=new.rule(bundle.decision_rule))
+            det.set_rule(det.settings.rule)
         if new.diagnostics_period_s != old.diagnostics_period_s \
                 and self.diagnostics_timer is not None:
             self.destroy_timer(self.diagnostics_timer)
@@ -648,12 +682,16 @@ class DetectorWiring:
         values.update({
             'model_id': self.bundle.model_id,
             'model_path': self.model_path,
+            'model_active': (det.active_name if isinstance(det, AudioFallback)
+                             else 'audio + F/T' if self.use_audio else 'F/T-only'),
+            'fallback_model_id': self.ft_bundle.model_id if self.ft_bundle else 'none',
             'decision_rule': rule.describe(),
             'armed': str(det.armed),
             'audio_msg_type': cfg.audio_msg_type,
-            'audio_format': self._format_text(),
+            'audio': 'on' if self.use_audio else 'off (F/T-only model)',
+            'audio_format': self._format_text() if self.use_audio else 'n/a',
             'audio_info': ('refused: ' + self.audio_refused if self.audio_refused
-                           else 'n/a' if not self.audio_spec.info_topic
+                           else 'n/a' if not self.audio_spec.info_topic or not self.use_audio
                            else 'ok' if self.audio_info_ok else 'waiting'),
             'audio_msg_rate_hz': f'{self.audio.window_msgs / span:.1f}',
             'audio_sample_rate_hz': f'{self.audio.window_samples / span:.0f}',
@@ -673,10 +711,12 @@ class DetectorWiring:
         values.update({name: str(value) for name, value in sorted(counts.items())})
         values['audio_received'] = str(self.audio.received)
         values['wrench_received'] = str(self.wrench.received)
-        stale = [name for name, value in (('audio', audio_age), ('wrench', wrench_age))
+        inputs = (('audio', audio_age), ('wrench', wrench_age)) if self.use_audio else (
+            ('wrench', wrench_age),)
+        stale = [name for name, value in inputs
                  if value is None or value > cfg.max_input_delay_s]
         # Until the first input arrives the node is waiting, not faulty: no warning.
-        waiting = audio_age is None and wrench_age is None
+        waiting = all(value is None for _, value in inputs)
         for name, stream in (('audio', self.audio), ('wrench', self.wrench)):
             if stream.received and name not in self._started:
                 self._started.add(name)
@@ -694,7 +734,8 @@ class DetectorWiring:
         if self.audio_refused:
             level, message = DiagnosticStatus.ERROR, f'audio refused: {self.audio_refused}'
         elif waiting:
-            level, message = DiagnosticStatus.WARN, 'waiting for input: audio, wrench'
+            level, message = DiagnosticStatus.WARN, (
+                'waiting for input: ' + ', '.join(name for name, _ in inputs))
         elif mismatch:
             level, message = DiagnosticStatus.WARN, mismatch
         elif stale:
@@ -705,6 +746,9 @@ class DetectorWiring:
         else:
             level, message = DiagnosticStatus.OK, (
                 f'running, release {"armed" if det.armed else "disarmed"}')
+        if isinstance(det, AudioFallback) and det.active is det.fallback:
+            message += '; F/T-only model active (no audio for audio.timeout_s)'
+            level = max(level, DiagnosticStatus.WARN)
         if level != DiagnosticStatus.OK and not waiting and message != mismatch:
             # Faults without a log line of their own (dropouts, stale input, clipping) show
             # up here, throttled like the others.
@@ -771,7 +815,8 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     cfg = node.config
     if cfg.executor_type == 'hot_path':
-        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench
+        # Without audio the wrench stream clocks the frames: never lazy.
+        lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench and node.use_audio
                 and cfg.wrench_stamp_source == 'header' else [])
         executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
                                    lazy=lazy, wanted=node.wrench_wanted,

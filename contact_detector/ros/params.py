@@ -99,6 +99,13 @@ class ParamSpec:
 PARAMS: Sequence[ParamSpec] = (
     ParamSpec('model.path', '', 'Model file (.npz; legacy .joblib or .skops need scikit-learn), '
               'with its .card.json beside it; empty = the shipped models/contact_forest.npz.'),
+    ParamSpec('audio.enabled', True, 'false: no audio subscription (a robot without a '
+              'microphone); with model.path empty the shipped F/T-only model '
+              'models/contact_forest_ft.npz is loaded. An F/T-only model.path also turns the '
+              'audio subscription off.'),
+    ParamSpec('audio.timeout_s', 0.0, 'With a model that uses audio: after this long without '
+              'audio (s of stream time) while F/T keeps coming, the shipped F/T-only model takes '
+              'over until the audio has been back for warmup_s; 0 = off.', 0.0, 60.0),
     ParamSpec('audio.msg_type', 'std_msgs/msg/Int16MultiArray',
               'Message type of the audio topic.', choices=tuple(AUDIO_MSG_TYPES)),
     ParamSpec('audio.sample_rate', 16000.0,
@@ -202,6 +209,8 @@ class NodeConfig:
     """
 
     model_path: str
+    audio_enabled: bool
+    audio_timeout_s: float
     audio_msg_type: str
     audio_sample_rate: float
     audio_channels: int
@@ -289,7 +298,8 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
     if not v['gripper.joint'].strip():
         raise ConfigError('parameter gripper.joint must not be empty')
     return NodeConfig(
-        model_path=v['model.path'], audio_msg_type=msg_type,
+        model_path=v['model.path'], audio_enabled=v['audio.enabled'],
+        audio_timeout_s=v['audio.timeout_s'], audio_msg_type=msg_type,
         audio_sample_rate=v['audio.sample_rate'], audio_channels=v['audio.channels'],
         audio_channel=None if channel < 0 else channel,
         audio_stamp_source=v['audio.stamp_source'], audio_max_chunk_s=v['audio.max_chunk_s'],

@@ -124,7 +124,8 @@ def ros1_int16_multiarray(data: np.ndarray) -> bytes:
     return (struct.pack('<II7sIIII', 1, 7, b'samples', n, n, 0, n) + data.tobytes())
 
 
-def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Path:
+def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
+                    audio: bool = True) -> Path:
     """
     Write one trial as a rosbag2 directory or a ROS 1 bag.
 
@@ -137,6 +138,8 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
         exist.
     storage : str
         'sqlite3', 'mcap' or 'ros1'.
+    audio : bool
+        False: no audio topic at all (a robot without a microphone).
 
     Returns
     -------
@@ -164,7 +167,7 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
     stamp_ns = _ns(trial, trial.wrench_t)
     wrench_log = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
     wrench_log_ns = np.maximum(_ns(trial, wrench_log), stamp_ns)
-    audio_log_ns = _ns(trial, trial.chunk_log_t)
+    audio_log_ns = _ns(trial, trial.chunk_log_t) if audio else np.zeros(0, np.int64)
     truth_ns = _ns(trial, np.array([trial.onset_t, trial.onset_end_t]))
     # one global log-time order (stable: wrench, audio, truth on ties)
     times = np.concatenate([wrench_log_ns, audio_log_ns, truth_ns])
@@ -174,23 +177,24 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
                           np.arange(2)])
     order = np.lexsort((idx, kinds, times))
     starts = np.concatenate(([0], trial.chunk_ends[:-1]))
-    audio = trial.audio
+    samples = trial.audio
     if storage == 'ros1':
         return _write_ros1(trial=trial, path=path, order=order, kinds=kinds, idx=idx,
-                           times=times, stamp_ns=stamp_ns, starts=starts)
+                           times=times, stamp_ns=stamp_ns, starts=starts, audio=audio)
     wrench_raw = wrench_cdr(stamp_ns=stamp_ns, force=trial.force, torque=trial.torque)
     try:
         writer = Writer(path, version=9, storage_plugin=STORAGES[storage])
         with writer:
             c_w = writer.add_connection(WRENCH_TOPIC, WRENCH_TYPE, typestore=ts)
-            c_a = writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=ts)
+            c_a = (writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=ts) if audio
+                   else None)
             c_t = writer.add_connection(TRUTH_TOPIC, TRUTH_TYPE, typestore=ts)
             for k in order:
                 kind, i, t = kinds[k], int(idx[k]), int(times[k])
                 if kind == 0:
                     writer.write(c_w, t, wrench_raw[i].tobytes())
                 elif kind == 1:
-                    chunk = audio[starts[i]:trial.chunk_ends[i]]
+                    chunk = samples[starts[i]:trial.chunk_ends[i]]
                     writer.write(c_a, t, int16_multiarray_cdr(chunk))
                 else:
                     writer.write(c_t, t, ts.serialize_cdr(Bool(data=(i == 0)), TRUTH_TYPE))
@@ -200,14 +204,15 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3') -> Pa
 
 
 def _write_ros1(*, trial: Trial, path: Path, order, kinds, idx, times, stamp_ns,
-                starts) -> Path:
+                starts, audio: bool = True) -> Path:
     store = get_typestore(Stores.ROS1_NOETIC)
     values = np.hstack([trial.force, trial.torque])
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with Ros1Writer(path) as writer:
             c_w = writer.add_connection(WRENCH_TOPIC, WRENCH_TYPE, typestore=store)
-            c_a = writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=store)
+            c_a = (writer.add_connection(AUDIO_TOPIC, AUDIO_TYPE, typestore=store) if audio
+                   else None)
             c_t = writer.add_connection(TRUTH_TOPIC, TRUTH_TYPE, typestore=store)
             for k in order:
                 kind, i, t = kinds[k], int(idx[k]), int(times[k])

@@ -1,0 +1,110 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""AudioFallback: the F/T-only model stands in while the audio is silent (shipped models)."""
+
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.fallback import AudioFallback, FT_ONLY, MULTIMODAL
+from contact_detector.errors import ConfigError
+from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
+from contact_detector.sim.trial import simulate_trial
+import numpy as np
+import pytest
+
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
+
+
+@pytest.fixture(scope='module')
+def bundles():
+    return load_bundle(path=default_model_path()), load_bundle(path=default_ft_model_path())
+
+
+@pytest.fixture(scope='module')
+def trial():
+    return simulate_trial(**TRIAL)
+
+
+def _fallback(bundles, timeout_s=0.3) -> AudioFallback:
+    primary, ft = bundles
+    return AudioFallback(primary=ContactDetector(bundle=primary, settings=DetectorSettings()),
+                         fallback=ContactDetector(bundle=ft, settings=DetectorSettings()),
+                         timeout_s=timeout_s)
+
+
+def _feed(fb: AudioFallback, trial, *, audio_until=np.inf, audio_from=np.inf) -> tuple:
+    """Feed the trial in log-time order; audio only outside (audio_until, audio_from)."""
+    events = []
+    starts = np.concatenate([[0], trial.chunk_ends[:-1]])
+    for lo, hi, t in zip(starts, trial.chunk_ends, trial.chunk_log_t):
+        if t < audio_until or t >= audio_from:
+            events.append((float(t), 1, lo, hi))
+    for j, t in enumerate(trial.wrench_t):
+        events.append((float(t), 0, j, j + 1))
+    events.sort()
+    frames, releases, active = 0, [], []
+    for t, kind, lo, hi in events:
+        if kind:
+            d = fb.on_audio(trial.audio[lo:hi], stamp=t, now=t)
+        else:
+            values = [*trial.force[lo], *trial.torque[lo]]
+            d = fb.on_wrench_one(t=trial.wrench_t[lo], values=values, now=t)
+        frames += len(d)
+        releases += d.releases
+        active.append((t, fb.active_name))
+    return frames, releases, active
+
+
+def test_audio_stops_halfway_ft_model_takes_over_and_releases_once(bundles, trial):
+    fb = _fallback(bundles)
+    stop = trial.onset_t - 1.2            # the audio dies between the two knocks on the hand
+    frames, releases, active = _feed(fb, trial, audio_until=stop)
+    assert fb.switches == 1 and fb.active_name == FT_ONLY
+    switched = next(t for t, name in active if name == FT_ONLY)
+    assert stop + 0.3 < switched < stop + 0.35          # the timeout, at a wrench message
+    assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.5
+    assert fb.counts['model_switches'] == 1 and fb.counts['releases'] == 1
+    assert 'model switched to F/T-only' in fb.switch_messages[0]
+    assert frames > 300
+
+
+def test_audio_back_hands_over_after_the_warm_up(bundles, trial):
+    fb = _fallback(bundles)
+    gap = (trial.onset_t - 3.0, trial.onset_t - 1.5)
+    _, releases, active = _feed(fb, trial, audio_until=gap[0], audio_from=gap[1])
+    assert fb.switches == 2 and fb.active_name == MULTIMODAL
+    back = [t for (t, name), (_, prev) in zip(active[1:], active) if name != prev][-1]
+    assert gap[1] + fb.primary.settings.warmup_s - 0.02 <= back <= gap[1] + 0.6
+    assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.3
+
+
+def test_a_switch_never_releases_and_arming_follows(bundles, trial):
+    fb = _fallback(bundles)
+    fb.arm(False)
+    _, releases, _ = _feed(fb, trial, audio_until=trial.onset_t - 1.2)
+    assert releases == [] and not fb.armed and fb.switches == 1
+    # no audio at all: the F/T-only model after the timeout, from the first wrench stamp
+    fb = _fallback(bundles)
+    _, releases, active = _feed(fb, trial, audio_until=-np.inf)
+    assert active[0][1] == MULTIMODAL and fb.active_name == FT_ONLY and fb.switches == 1
+    assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.5
+
+
+def test_wrong_models_are_refused(bundles):
+    primary, ft = bundles
+    det = ContactDetector(bundle=primary, settings=DetectorSettings())
+    with pytest.raises(ConfigError, match='F/T-only model as fallback'):
+        AudioFallback(primary=det, fallback=det, timeout_s=0.3)
+    with pytest.raises(ConfigError, match='timeout'):
+        AudioFallback(primary=det, fallback=ContactDetector(
+            bundle=ft, settings=DetectorSettings()), timeout_s=0.0)

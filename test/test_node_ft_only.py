@@ -1,0 +1,214 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The live node with an F/T-only model (a robot without a microphone), with real rclpy.
+
+No audio subscription; one frame per F/T feature frame, equal to :class:`ContactDetector`
+run offline on the same stamps; one release at the contact; audio.enabled false loads the
+shipped F/T-only model and refuses a model that needs audio.
+"""
+
+import time
+
+from builtin_interfaces.msg import Time
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.errors import ConfigError
+from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
+from contact_detector.ros.node import ContactDetectorNode
+from contact_detector.sim.trial import simulate_trial
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import WrenchStamped
+import node_support
+import numpy as np
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Bool, Float32, Int16MultiArray
+
+pytestmark = pytest.mark.rclpy
+
+TICK_S = 0.01
+TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
+
+
+@pytest.fixture
+def context():
+    ctx = Context()
+    rclpy.init(context=ctx)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+def _stamp(t: float) -> Time:
+    sec = int(np.floor(t))
+    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+
+
+class FtHarness:
+    """The node under test, a feeder for /clock, wrench (and audio nobody should hear)."""
+
+    def __init__(self, context, **params):
+        values = {'use_sim_time': True, 'qos.reliability': 'reliable', 'qos.depth': 1000,
+                  'diagnostics.period_s': 0.5}
+        values.update(params)
+        self.node = ContactDetectorNode(
+            context=context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in values.items()])
+        self.io = rclpy.create_node('test_io_ft', context=context)
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self.clock_pub = self.io.create_publisher(Clock, '/clock', 10)
+        self.wrench_pub = self.io.create_publisher(WrenchStamped, 'wrist_wrench', reliable)
+        self.audio_pub = self.io.create_publisher(Int16MultiArray, 'audio', reliable)
+        self.contact, self.prob, self.release, self.diag = [], [], [], []
+        for msg_type, topic, sink in ((Bool, 'contact', self.contact),
+                                      (Float32, 'contact_probability', self.prob),
+                                      (Bool, 'release', self.release),
+                                      (DiagnosticArray, '/diagnostics', self.diag)):
+            self.io.create_subscription(msg_type, topic, sink.append, reliable)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.io)
+        self.clock_t = None
+        self.spin_until(lambda: self.clock_pub.get_subscription_count() > 0
+                        and self.wrench_pub.get_subscription_count() > 0
+                        and len(self.io.get_publishers_info_by_topic('/release')) > 0)
+
+    def spin_until(self, predicate, timeout=10.0):
+        end = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > end:
+                raise AssertionError('timed out waiting for the node')
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def set_clock(self, t: float) -> None:
+        self.clock_pub.publish(Clock(clock=_stamp(t)))
+        target = _stamp(t)
+        want = target.sec * 1_000_000_000 + target.nanosec
+        self.spin_until(lambda: self.node.get_clock().now().nanoseconds == want)
+        self.clock_t = t
+
+    def send_wrench(self, t, force, torque) -> None:
+        msg = WrenchStamped()
+        msg.header.stamp = _stamp(float(t))
+        f, m = msg.wrench.force, msg.wrench.torque
+        f.x, f.y, f.z = (float(v) for v in force)
+        m.x, m.y, m.z = (float(v) for v in torque)
+        n = self.node.wrench.received
+        self.wrench_pub.publish(msg)
+        self.spin_until(lambda: self.node.wrench.received > n)
+
+    def send_audio(self, samples) -> None:
+        n = self.node.audio.received
+        self.audio_pub.publish(Int16MultiArray(data=samples.tolist()))
+        self.spin_until(lambda: self.node.audio.received > n)
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.io.destroy_node()
+
+
+def test_ft_only_model_runs_without_audio_and_releases_once(context):
+    trial = simulate_trial(**TRIAL)
+    h = FtHarness(context, **{'model.path': str(default_ft_model_path())})
+    try:
+        assert h.node.audio_sub is None and h.node.info_sub is None
+        assert h.audio_pub.get_subscription_count() == 0
+        bundle = load_bundle(path=default_ft_model_path())
+        det = ContactDetector(bundle=bundle, settings=DetectorSettings(
+            wrench_rate=trial.ft_rate))
+        keep = np.flatnonzero((trial.wrench_t >= trial.onset_t - 2.5)
+                              & (trial.wrench_t < trial.onset_t + 1.5))
+        p, releases = [], []
+        for j in keep:
+            tick = trial.start_time + np.floor(
+                (trial.wrench_t[j] - trial.start_time) / TICK_S) * TICK_S
+            if h.clock_t is None or tick > h.clock_t + 1e-9:
+                h.set_clock(tick)
+            h.send_wrench(trial.wrench_t[j], trial.force[j], trial.torque[j])
+            d = det.on_wrench(t=trial.wrench_t[j:j + 1], force=trial.force[j:j + 1],
+                              torque=trial.torque[j:j + 1], now=h.clock_t)
+            p.extend(d.p)
+            releases.extend(d.releases)
+        counts = h.node.detector_counts()
+        h.spin_until(lambda: len(h.prob) >= counts['frames'])
+        # One frame per F/T feature frame, the offline detector's; one release at the contact.
+        assert counts['frames'] == len(p) == len(h.prob) > 300
+        np.testing.assert_array_equal([m.data for m in h.prob], np.array(p, np.float32))
+        assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.3
+        assert [m.data for m in h.release] == [True]
+        h.spin_until(lambda: len(h.diag) > 0, timeout=5.0)
+        values = {kv.key: kv.value for kv in h.diag[-1].status[0].values}
+        assert values['audio'].startswith('off') and values['model_id'] == bundle.model_id
+    finally:
+        h.close()
+
+
+def test_audio_disabled_loads_the_shipped_ft_model(context):
+    h = FtHarness(context, **{'audio.enabled': False})
+    try:
+        assert h.node.bundle.feature_config.ft_only and h.node.audio_sub is None
+        assert h.node.model_path == str(default_ft_model_path())
+    finally:
+        h.close()
+
+
+def test_audio_disabled_refuses_a_model_that_needs_audio(context):
+    overrides = [Parameter('audio.enabled', value=False),
+                 Parameter('model.path', value=str(default_model_path()))]
+    with pytest.raises(ConfigError, match='audio.enabled is false'):
+        ContactDetectorNode(context=context, parameter_overrides=overrides)
+
+
+def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
+    trial = simulate_trial(**TRIAL)
+    h = FtHarness(context, **{'model.path': str(default_model_path()), 'audio.timeout_s': 0.3})
+    try:
+        h.spin_until(lambda: h.audio_pub.get_subscription_count() > 0)
+        stop = trial.onset_t - 1.2          # the audio publisher dies between the two knocks
+        events = node_support.trial_events(trial, t_from=trial.onset_t - 2.5,
+                                           t_to=trial.onset_t + 1.5)
+        frames_at_stop = release_at = None
+        for e in events:
+            tick = trial.start_time + np.floor((e.t - trial.start_time) / TICK_S) * TICK_S
+            if h.clock_t is None or tick > h.clock_t + 1e-9:
+                h.set_clock(tick)
+            if e.kind == 'audio':
+                if e.t < stop:
+                    h.send_audio(trial.audio[e.lo:e.hi])
+                continue
+            if frames_at_stop is None and e.t >= stop:
+                frames_at_stop = h.node.detector_counts()['contact_msgs']
+            h.send_wrench(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
+            if release_at is None and h.node.detector_counts()['release_msgs']:
+                release_at = e.t
+        counts = h.node.detector_counts()
+        assert trial.onset_t < release_at <= trial.onset_t + 0.5
+        # It kept deciding after the audio stopped, switched once, released once at the contact.
+        assert counts['contact_msgs'] > frames_at_stop + 200
+        assert counts['model_switches'] == 1 and counts['releases'] == 1
+        assert [m.data for m in h.release] == [True]
+        assert h.node.detector.active_name == 'F/T-only'
+        h.spin_until(lambda: any(
+            {kv.key: kv.value for kv in d.status[0].values}.get('model_active') == 'F/T-only'
+            for d in h.diag), timeout=5.0)
+        status = h.diag[-1].status[0]
+        assert 'F/T-only model active' in status.message
+    finally:
+        h.close()

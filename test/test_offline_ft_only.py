@@ -1,0 +1,130 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+detect, evaluate and train on recordings without a microphone (no audio topic at all).
+
+Bags are written in tmp_path from simulated trials with ``write_trial_bag(audio=False)``. Without
+``--model`` the tools pick the shipped F/T-only model for such a recording and say so.
+"""
+
+import json
+from pathlib import Path
+
+from contact_detector.cli import main as cli_main
+from contact_detector.io.bags import topic_types
+from contact_detector.model.bundle import default_ft_model_path, load_bundle
+from contact_detector.sim import simulate_trials
+from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+import pytest
+
+N_TRIALS = 8
+
+
+@pytest.fixture(scope='module')
+def no_audio(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp('no_audio')
+    trials = list(simulate_trials(n=N_TRIALS, seed=5, conditions=('wide',)))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=out / trial.name, audio=False)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=out)
+    return out
+
+
+def _rows(path: Path) -> list:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_detect_uses_the_shipped_ft_model_without_audio(no_audio, tmp_path, capsys):
+    bag = no_audio / 'trial_0000'
+    assert '/audio' not in topic_types(bag)
+    out = tmp_path / 'd.jsonl'
+    assert cli_main.main(['detect', str(bag), '--out', str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert 'without an audio topic' in printed and 'contact_forest_ft.npz' in printed
+    assert 'F/T-only' in printed and 'no audio topic' in printed       # discovery's summary
+    rows = _rows(out)
+    frames = [r for r in rows if 'p' in r]
+    releases = [r for r in rows if r.get('event') == 'release']
+    # ~one frame per 10 ms F/T sample from the first full window on; one release at most
+    assert len(frames) > 300 and len(releases) <= 1
+    times = [r['t'] for r in frames]
+    assert times == sorted(times)
+
+
+def test_a_multimodal_model_refuses_a_recording_without_audio(no_audio, tmp_path, capsys):
+    # --model wins, and a model that needs audio cannot decide such a recording: an error.
+    from contact_detector.model.bundle import default_model_path
+    out = tmp_path / 'm.jsonl'
+    assert cli_main.main(['detect', str(no_audio / 'trial_0001'), '--model',
+                          str(default_model_path()), '--out', str(out)]) == 1
+    assert 'no audio' in capsys.readouterr().err
+    assert not out.exists()
+    assert cli_main.main(['evaluate', str(no_audio / 'trial_0001'), '--model',
+                          str(default_model_path())]) == 1
+    assert 'no audio' in capsys.readouterr().err
+
+
+def test_audio_disabled_in_params_picks_the_ft_model_for_audio_bags(tmp_path, capsys):
+    trial = next(simulate_trials(n=1, seed=6, conditions=('paper',)))
+    bag = write_trial_bag(trial=trial, path=tmp_path / 'with_audio')
+    params = tmp_path / 'p.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    audio:\n      enabled: false\n')
+    out = tmp_path / 'a.jsonl'
+    assert cli_main.main(['detect', str(bag), '--params', str(params), '--out', str(out)]) == 0
+    assert 'contact_forest_ft.npz' in capsys.readouterr().out
+    assert len([r for r in _rows(out) if 'p' in r]) > 300
+
+
+def test_evaluate_shows_the_ft_model_beside_the_others(no_audio, tmp_path, capsys):
+    report = tmp_path / 'report'
+    assert cli_main.main(['evaluate', str(no_audio), '--detector', 'all',
+                          '--report', str(report)]) == 0
+    captured = capsys.readouterr()
+    table = captured.out
+    for name in ('| forest |', '| forest-ft |', '| threshold |'):
+        assert name in table
+    assert 'forest on recordings without an audio topic' in captured.err
+    assert 'contact_forest_ft.npz' in captured.err
+    metrics = json.loads((report / 'metrics.json').read_text())
+    # Without audio, forest is the F/T-only model: the same outcomes as forest-ft.
+    assert metrics['forest']['summary'] == metrics['forest-ft']['summary']
+    assert metrics['forest']['summary']['all']['premature'] == 0
+
+
+def test_train_no_audio_writes_an_ft_only_model(no_audio, tmp_path, capsys):
+    model = tmp_path / 'ft.npz'
+    assert cli_main.main(['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1',
+                          '--trees', '2', '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    assert bundle.feature_config.ft_only and 'audio_power' not in bundle.feature_names
+    assert bundle.feature_config.extra_features == load_bundle(
+        path=default_ft_model_path()).feature_config.extra_features
+    out = tmp_path / 'd.jsonl'
+    assert cli_main.main(['detect', str(no_audio / 'trial_0002'), '--model', str(model),
+                          '--out', str(out)]) == 0
+    assert 'ft.npz' in capsys.readouterr().out
+
+
+def test_train_no_audio_refuses_audio_features(no_audio, tmp_path, capsys):
+    assert cli_main.main(['train', str(no_audio), '--no-audio', '--extra-features',
+                          'audio_peak_rel_db,force_shift', '--out',
+                          str(tmp_path / 'x.npz')]) == 1
+    assert 'audio_peak_rel_db' in capsys.readouterr().err
+
+
+def test_train_with_audio_features_refuses_a_recording_without_audio(no_audio, tmp_path,
+                                                                     capsys):
+    assert cli_main.main(['train', str(no_audio), '--out', str(tmp_path / 'x.npz')]) == 1
+    assert 'no audio' in capsys.readouterr().err
