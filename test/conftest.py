@@ -21,3 +21,24 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ['ROS_STATIC_PEERS'] = ''
 os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
 os.environ.setdefault('MPLBACKEND', 'Agg')
+
+
+import pytest  # noqa: E402  (after the environment above, before anything starts rclpy)
+
+
+@pytest.fixture
+def context():
+    """Yield an rclpy context of the test's own, shut down after it."""
+    import rclpy
+    from rclpy.context import Context
+    ctx = Context()
+    rclpy.init(context=ctx)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+@pytest.fixture(scope='module')
+def model(tmp_path_factory):
+    """Return a model file for the module's node tests (the shipped one where it exists)."""
+    import node_support
+    return node_support.model_path(tmp_path_factory.mktemp('model'))

@@ -165,3 +165,10 @@ def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> int:
             proc.kill()
             return proc.wait()
     return proc.returncode
+
+
+def stamp(t: float):
+    """Return ``t`` seconds as a ``builtin_interfaces/Time`` (nanoseconds rounded, capped)."""
+    from builtin_interfaces.msg import Time
+    sec = int(np.floor(t))
+    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))

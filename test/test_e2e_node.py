@@ -37,11 +37,6 @@ HERE = Path(__file__).resolve().parent
 LATENCY_BUDGET_S = 0.3
 
 
-@pytest.fixture(scope='module')
-def model(tmp_path_factory):
-    return node_support.model_path(tmp_path_factory.mktemp('model'))
-
-
 _start = node_support.start_process
 _stop = node_support.stop_process
 

@@ -23,7 +23,6 @@ as in test_node.py.
 
 import time
 
-from builtin_interfaces.msg import Time
 from contact_detector.ros.lifecycle_node import ContactDetectorLifecycleNode
 from contact_detector.sim.trial import simulate_trial
 from geometry_msgs.msg import WrenchStamped
@@ -34,7 +33,6 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 import rclpy
-from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
@@ -49,26 +47,11 @@ TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}
 
 
 @pytest.fixture(scope='module')
-def model(tmp_path_factory):
-    return node_support.model_path(tmp_path_factory.mktemp('model'))
-
-
-@pytest.fixture(scope='module')
 def trial():
     return simulate_trial(**TRIAL)
 
 
-@pytest.fixture
-def context():
-    ctx = Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
-
-
-def stamp(t: float) -> Time:
-    sec = int(np.floor(t))
-    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+stamp = node_support.stamp
 
 
 class Manager:

@@ -29,7 +29,6 @@ import subprocess
 import sys
 import time
 
-from builtin_interfaces.msg import Time
 from contact_detector.detection.detector import ContactDetector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.model.bundle import load_bundle
@@ -60,26 +59,11 @@ TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1
 
 
 @pytest.fixture(scope='module')
-def model(tmp_path_factory):
-    return node_support.model_path(tmp_path_factory.mktemp('model'))
-
-
-@pytest.fixture(scope='module')
 def trial():
     return simulate_trial(**TRIAL)
 
 
-@pytest.fixture
-def context():
-    ctx = Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
-
-
-def stamp(t: float) -> Time:
-    sec = int(np.floor(t))
-    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+stamp = node_support.stamp
 
 
 def wrench_msg(t, force, torque) -> WrenchStamped:

@@ -22,7 +22,6 @@ shipped F/T-only model and refuses a model that needs audio.
 
 import time
 
-from builtin_interfaces.msg import Time
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.errors import ConfigError
 from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
@@ -34,7 +33,6 @@ import node_support
 import numpy as np
 import pytest
 import rclpy
-from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -47,17 +45,7 @@ TICK_S = 0.01
 TRIAL = {'seed': 3, 'index': 21, 'hits': 'hand'}  # in-air hand hits 1.5 s and 1.1 s before onset
 
 
-@pytest.fixture
-def context():
-    ctx = Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
-
-
-def _stamp(t: float) -> Time:
-    sec = int(np.floor(t))
-    return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+stamp = node_support.stamp
 
 
 class FtHarness:
@@ -97,15 +85,15 @@ class FtHarness:
             self.executor.spin_once(timeout_sec=0.01)
 
     def set_clock(self, t: float) -> None:
-        self.clock_pub.publish(Clock(clock=_stamp(t)))
-        target = _stamp(t)
+        self.clock_pub.publish(Clock(clock=stamp(t)))
+        target = stamp(t)
         want = target.sec * 1_000_000_000 + target.nanosec
         self.spin_until(lambda: self.node.get_clock().now().nanoseconds == want)
         self.clock_t = t
 
     def send_wrench(self, t, force, torque) -> None:
         msg = WrenchStamped()
-        msg.header.stamp = _stamp(float(t))
+        msg.header.stamp = stamp(float(t))
         f, m = msg.wrench.force, msg.wrench.torque
         f.x, f.y, f.z = (float(v) for v in force)
         m.x, m.y, m.z = (float(v) for v in torque)

@@ -42,19 +42,6 @@ pytestmark = pytest.mark.rclpy
 FLOAT_PARAMS = [spec for spec in PARAMS if isinstance(spec.default, float)]
 
 
-@pytest.fixture(scope='module')
-def model(tmp_path_factory):
-    return node_support.model_path(tmp_path_factory.mktemp('model'))
-
-
-@pytest.fixture
-def context():
-    ctx = Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
-
-
 def as_int(value: float) -> int:
     """Return an integer inside the parameter's range near its default (0.05 -> 1)."""
     return int(math.ceil(value))
