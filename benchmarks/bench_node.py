@@ -114,7 +114,7 @@ def _spawn(cmd, log: Path) -> subprocess.Popen:
 def _frame_chunks(*, audio_rate: int, n_chunks: int, chunk: int) -> np.ndarray:
     """Index of the audio chunk that completes each frame (the feature core's frame ends)."""
     from contact_detector.features.config import FeatureConfig
-    from contact_detector.features.streaming import frame_ends
+    from contact_detector.features.audio import frame_ends
     config = FeatureConfig()
     length = config.audio_frame_samples(audio_rate)
     hop = config.audio_hop_s * audio_rate

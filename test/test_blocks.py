@@ -27,7 +27,8 @@ from contact_detector.detection.blocks import run_blocks
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.features import spectral
-from contact_detector.features.streaming import ForceTorqueStream, NoiseFloor
+from contact_detector.features.audio import NoiseFloor
+from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, StreamSpec,
                                                WrenchEvent)
 from contact_detector.model.bundle import default_model_path, load_bundle

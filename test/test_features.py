@@ -22,7 +22,7 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
 from contact_detector.features.config import EXTRA_FEATURES
-from contact_detector.features.streaming import ForceTorqueStream
+from contact_detector.features.force_torque import ForceTorqueStream
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest

@@ -27,7 +27,8 @@ from contact_detector.errors import ConfigError
 from contact_detector.features.batch import batch_features
 from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureConfig,
                                               PAPER_FEATURES, SHIFT_FEATURES)
-from contact_detector.features.streaming import ForceTorqueStream, StreamingFeatureExtractor
+from contact_detector.features.force_torque import ForceTorqueStream
+from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, WrenchEvent
 from contact_detector.model.bundle import DecisionRule, ModelBundle, runtime_versions
 import numpy as np

@@ -19,8 +19,8 @@ import dataclasses
 from contact_detector.cli import detect as detect_cli
 from contact_detector.errors import ConfigError
 from contact_detector.features.config import FeatureConfig
+from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.features.resample import integer_ratio, WrenchResampler
-from contact_detector.features.streaming import ForceTorqueStream
 from contact_detector.io.discovery import discover_streams
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial

@@ -45,9 +45,10 @@ from contact_detector.detection.detector import (AudioRateCheck, CLIP_LEVEL, Con
                                                  Decisions)
 from contact_detector.errors import InputError
 from contact_detector.features import spectral
+from contact_detector.features.audio import frame_ends, to_unit_audio
 from contact_detector.features.config import AUDIO_FEATURES
-from contact_detector.features.streaming import (FeatureFrames, frame_ends,
-                                                 StreamingFeatureExtractor, to_unit_audio)
+from contact_detector.features.frames import FeatureFrames
+from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
 import numpy as np
 
@@ -181,7 +182,7 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
         block = ends[lo:lo + POWER_BLOCK]
         power[lo:lo + block.size] = spectral.audio_power(
             frames=samples[(block - w)[:, None] + framer._offsets])
-    per_frame = ex.audio_rows(power)
+    per_frame = ex.levels.rows(power)
     audio = np.array(per_frame) if per_frame else np.zeros((0, len(AUDIO_FEATURES)))
 
     # --- F/T: one push of every sample (no gaps: checked by the scan) -----------------------

@@ -28,8 +28,9 @@ from typing import Optional, Sequence, Union
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
-from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
-                                                 TimeJumpError, to_unit_audio)
+from contact_detector.features.audio import to_unit_audio
+from contact_detector.features.frames import FeatureFrames, TimeJumpError
+from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import DecisionRule, ModelBundle
 import numpy as np
 

@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 from typing import Iterable, List
 
 from contact_detector.detection.detector import ContactDetector, Decisions
-from contact_detector.features.streaming import FeatureFrames, StreamingFeatureExtractor
+from contact_detector.features.frames import FeatureFrames
+from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
 import numpy as np
 

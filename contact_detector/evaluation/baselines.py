@@ -36,8 +36,8 @@ from typing import Optional
 from contact_detector.detection.detector import Decisions
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
+from contact_detector.features.audio import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.features.config import FeatureConfig
-from contact_detector.features.streaming import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.model.bundle import DecisionRule
 import numpy as np
 from scipy import signal

@@ -16,8 +16,8 @@
 
 from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig, PAPER_FEATURES)
-from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
-                                                 TimeJumpError)
+from contact_detector.features.frames import FeatureFrames, TimeJumpError
+from contact_detector.features.streaming import StreamingFeatureExtractor
 
 __all__ = ['EXTRA_FEATURES', 'FEATURE_SCHEMA_VERSION', 'FeatureConfig', 'FeatureFrames',
            'PAPER_FEATURES', 'StreamingFeatureExtractor', 'TimeJumpError']

@@ -27,8 +27,9 @@ from typing import Optional
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
                                               SHIFT_FEATURES)
+from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
+from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
-from contact_detector.features.streaming import FeatureFrames, FT_SPECTRAL_COLUMNS
 import numpy as np
 
 

@@ -1,0 +1,138 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Load-change features of |F| and |T|: window means and medians, vector shifts, change angles.
+
+``*_delta = window_mean(ends) - window_mean(ends - delta_lag)``, ``*_change = window_mean(ends)
+- window_median(ends - delta_lag)``, ``*_shift = |mean(F) - median(F)|`` over the vectors and
+``ft_*_angle = atan2(dT, dF)``; :class:`~contact_detector.features.force_torque.ForceTorqueStream`
+evaluates them on its window (see docs/features.md).
+"""
+
+import numpy as np
+
+
+def with_angle(names: tuple, change: np.ndarray) -> dict:
+    """Name the |F| and |T| columns of ``change`` (m, 2) and their :func:`delta_angle`."""
+    f, t = change[:, 0], change[:, 1]
+    return dict(zip(names, (f, t, delta_angle(force_delta=f, torque_delta=t))))
+
+
+def window_mean(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
+    """
+    Mean of the ``window`` samples ending at each of ``ends``: ``mean(s[e-w+1..e])``.
+
+    ``*_delta = window_mean(ends) - window_mean(ends - delta_lag)`` and
+    ``*_change = window_mean(ends) - window_median(ends - delta_lag)``.
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n,) or (n, c)
+        |F| in N and/or |T| in N m, one column each.
+    ends : np.ndarray, shape (m,)
+        Indices of the newest sample of each window, ``>= window - 1``.
+    window : int
+        Samples averaged.
+
+    Returns
+    -------
+    np.ndarray, shape (m,) or (m, c)
+        Same unit as ``signal``.
+
+    """
+    # np.mean's own arithmetic (the sum along the axis, then one division) without its wrapper
+    return np.add.reduce(signal[ends[:, None] + np.arange(1 - window, 1)], axis=1) / window
+
+
+def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
+    """
+    Median of the ``window`` samples ending at each of ``ends`` (a robust baseline).
+
+    A knock shorter than half the window does not move it, so the ``*_change`` features do not
+    see a knock again, with the opposite sign, when it leaves their baseline (as ``*_delta``
+    does ``delta_lag`` samples later).
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n,) or (n, c)
+        |F| in N and/or |T| in N m, one column each.
+    ends : np.ndarray, shape (m,)
+        Indices of the newest sample of each window, ``>= window - 1``.
+    window : int
+        Samples in the median.
+
+    Returns
+    -------
+    np.ndarray, shape (m,) or (m, c)
+        ``np.median``'s values, from one partition (``np.median`` costs ~3x as much per call).
+
+    """
+    old = signal[ends[:, None] + np.arange(1 - window, 1)]
+    k = window // 2
+    if window % 2:
+        return np.partition(old, k, axis=1)[:, k]
+    part = np.partition(old, (k - 1, k), axis=1)
+    return (part[:, k - 1] + part[:, k]) / 2
+
+
+def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
+    """
+    Length of the change of the force and of the torque vector: ``|recent - baseline|``.
+
+    ``force_shift = sqrt(sum_k (F_k - B_k)^2)`` over the three axes ``k``, likewise for the
+    torque. A rotation of the sensor frame, a constant bias (an untared sensor) or the
+    direction of gravity in the sensor frame do not change it.
+
+    Parameters
+    ----------
+    recent, baseline : np.ndarray, shape (m, 6)
+        Force x, y, z in N then torque x, y, z in N m: the newest samples' mean and the
+        baseline's per-axis median (:func:`window_mean`, :func:`window_median`).
+
+    Returns
+    -------
+    np.ndarray, shape (m, 2)
+        ``force_shift`` in N and ``torque_shift`` in N m, >= 0 (0 when nothing changed).
+
+    """
+    change = recent - baseline
+    return np.stack([np.linalg.norm(change[:, :3], axis=1),
+                     np.linalg.norm(change[:, 3:], axis=1)], axis=1)
+
+
+def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:
+    """
+    Direction of a load change in the (force, torque) plane: ``atan2(dT, dF)``.
+
+    A force change of size ``dF`` acting on a line at distance ``r`` from the sensor changes the
+    torque by about ``r dF``, so ``tan(angle) = dT / dF`` is that lever arm in m, whatever the
+    object weighs. Contact with the table acts at the bottom of the object, inertial forces at
+    its centre of mass, knocks on the hand near the sensor; the sign tells unloading
+    (``dF < 0``, the table takes weight) from loading.
+
+    Parameters
+    ----------
+    force_delta : np.ndarray, shape (m,)
+        Change of |F| (``force_delta`` or ``force_change``), N.
+    torque_delta : np.ndarray, shape (m,)
+        Change of |T| over the same samples, N m.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        Angle in rad, in ``[-pi, pi]``; 0 when nothing changed.
+
+    """
+    return np.arctan2(torque_delta, force_delta)

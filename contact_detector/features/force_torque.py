@@ -1,0 +1,314 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The F/T path of the streaming feature core: wrench samples to spectral and load-change features.
+
+:class:`ForceTorqueStream` resamples the wrench onto the ``ft_rate_hz`` grid, keeps |F|, |T|
+(and the vectors, for the shift features) over the window, and computes one feature frame every
+``ft_hop`` samples: the spectral centroid, spread and flux of |F| and |T| (paper eqs. 2-4,
+:mod:`~contact_detector.features.spectral`) and the configured load-change features
+(:mod:`~contact_detector.features.deltas`).
+"""
+
+from typing import Optional, Sequence
+
+from contact_detector.errors import InputError
+from contact_detector.features import spectral
+from contact_detector.features.buffers import running_max, TailBuffer
+from contact_detector.features.config import (CHANGE_FEATURES, DELTA_FEATURES, FeatureConfig,
+                                              PAPER_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.deltas import (vector_shift, window_mean, window_median,
+                                              with_angle)
+from contact_detector.features.frames import TimeJumpError
+from contact_detector.features.resample import WrenchResampler
+import numpy as np
+
+
+#: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
+FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
+
+
+class ForceTorqueStream:
+    """
+    Spectral features of |F| and |T| over a sliding DFT window.
+
+    Input at ``input_rate`` is first brought onto the ``ft_rate_hz`` grid by
+    :class:`~contact_detector.features.resample.WrenchResampler` (an integer multiple M is
+    averaged over blocks of M samples timed at their last sample; any other rate from 50 Hz to
+    10 kHz is box-filtered and interpolated). A feature frame ends at every
+    ``ft_hop``-th decimated sample once ``ft_window`` samples (and the delta history) are
+    there; its time is the time of its last sample.
+
+    Parameters
+    ----------
+    config : FeatureConfig
+        Window, hop, window function, detrending and extra features.
+    input_rate : float
+        Wrench sample rate in Hz.
+    gap_reset_s : float
+        A stamp gap longer than this restarts the window (the DFT needs uniform samples).
+    backjump_tolerance_s : float
+        A stamp earlier than the previous one by more than this raises :class:`TimeJumpError`;
+        by less (a duplicate or reordered message) raises :class:`InputError`.
+
+    """
+
+    def __init__(self, *, config: FeatureConfig, input_rate: float,
+                 gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
+        self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz)
+        self.config = config
+        self.input_rate = float(input_rate)
+        self.decimation = self._resampler.block     # 0: not an integer ratio (interpolated)
+        self.gap_reset_s = max(gap_reset_s, 1.5 / input_rate)
+        self.backjump_tolerance_s = backjump_tolerance_s
+        self.use_delta = [name for name in config.extra_features if name in DELTA_FEATURES]
+        n = config.ft_window
+        need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
+                if self.use_delta else n)
+        if set(self.use_delta) & set(SHIFT_FEATURES):
+            need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
+        self.first_end = need - 1
+        self.history = need
+        self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
+        self._offsets = np.arange(n)
+        wanted = set(self.use_delta)
+        self._want_delta = bool(wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'})
+        self._want_change = bool(wanted & set(CHANGE_FEATURES))
+        self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
+        # (force_change, torque_change) of the frames before the newest, for *_change_max.
+        self._recent_changes = TailBuffer(capacity=config.change_max_frames, width=2)
+        self._want_shift = bool(wanted & set(SHIFT_FEATURES))
+        # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
+        self._recent_shifts = TailBuffer(
+            capacity=max(config.change_max_frames, config.shift_min_frames), width=2)
+        self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
+                                            ('ft_change_angle', 'force_change', 'torque_change'))
+                        if angle[0] in wanted]
+        self._mags = TailBuffer(capacity=need + 64, width=2)    # |F|, |T| of the newest samples
+        self._mag_ts = TailBuffer(capacity=need + 64)            # their times
+        self._vecs = TailBuffer(capacity=need + 64, width=6)     # F, T vectors (shift features)
+        self.restarts = 0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything, including the last stamp seen."""
+        self.last_input_t: Optional[float] = None
+        self._restart()
+
+    def _restart(self) -> None:
+        # Forget the window, previous spectra and partial block; keep the last stamp.
+        self._resampler.reset()
+        self._mags.clear()                  # |F|, |T| of the newest decimated samples
+        self._mag_ts.clear()                # their times
+        self._mag_start = 0                 # decimated index of the oldest sample kept
+        self._n_dec = 0                     # decimated samples since the restart
+        self._prev_en: Optional[np.ndarray] = None   # (2, n_bins) previous EN spectra
+        self._recent_changes.clear()
+        self._vecs.clear()
+        self._recent_shifts.clear()
+
+    def check_stamps(self, t: np.ndarray) -> None:
+        """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
+        if t.size > 1 and not np.all(np.diff(t) > 0):
+            raise InputError('wrench stamps within a message are not strictly increasing')
+        if self.last_input_t is not None and t[0] <= self.last_input_t:
+            back = self.last_input_t - t[0]
+            if back > self.backjump_tolerance_s:
+                raise TimeJumpError(f'wrench stamp {t[0]:.6f} is {back:.3f} s before the '
+                                    'previous one (time jumped backwards)')
+            raise InputError(f'wrench stamp {t[0]:.6f} repeats or precedes the previous one '
+                             f'({self.last_input_t:.6f}); message dropped')
+
+    def push(self, *, t: np.ndarray, force: np.ndarray,
+             torque: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Add wrench samples; return the feature frames they complete.
+
+        Parameters
+        ----------
+        t : np.ndarray, shape (n,)
+            Sample stamps, seconds, strictly increasing.
+        force, torque : np.ndarray, shape (n, 3)
+            Force in N and torque in N m, finite.
+
+        Returns
+        -------
+        t_frames : np.ndarray, shape (m,)
+            Time of each feature frame's last sample.
+        features : np.ndarray, shape (m, len(self.columns))
+
+        """
+        self.check_stamps(t)
+        values = np.concatenate([force, torque], axis=1)
+        if t.size == 1:
+            # One sample (a live wrench message): the split below without its array calls.
+            if self.last_input_t is not None \
+                    and float(t[0]) - self.last_input_t > self.gap_reset_s:
+                self.restarts += 1
+                self._restart()
+            out = self._push_segment(t, values)
+            self.last_input_t = float(t[0])
+            return out
+        # Split where the stamps jump forward by more than the gap: a reset between segments.
+        previous = self.last_input_t if self.last_input_t is not None else t[0]
+        gaps = np.flatnonzero(np.diff(np.concatenate([[previous], t])) > self.gap_reset_s)
+        bounds = list(gaps) + [t.size]
+        out_t, out_f = [], []
+        lo = 0
+        for hi in bounds:
+            if hi > lo:
+                ft, ff = self._push_segment(t[lo:hi], values[lo:hi])
+                out_t.append(ft)
+                out_f.append(ff)
+            if hi < t.size:
+                self.restarts += 1
+                self._restart()
+            lo = hi
+        self.last_input_t = float(t[-1])
+        if not out_t:
+            return np.zeros(0), np.zeros((0, len(self.columns)))
+        return np.concatenate(out_t), np.concatenate(out_f)
+
+    def push_one(self, *, t: float, values: Sequence[float]) -> Optional[tuple[float, list]]:
+        """
+        Add one wrench sample (a live message); return the feature frame it completes, if any.
+
+        :meth:`push` with one sample: the same code, so the same numbers.
+
+        Parameters
+        ----------
+        t : float
+            Sample stamp, seconds, finite.
+        values : sequence of 6 float
+            Force x, y, z in N and torque x, y, z in N m, finite.
+
+        Returns
+        -------
+        (float, list of float) or None
+            The frame's time and its features (``self.columns``), or None.
+
+        """
+        row = np.array([values], dtype=np.float64)
+        ft_t, ft_x = self.push(t=np.array([t], dtype=np.float64), force=row[:, :3],
+                               torque=row[:, 3:])
+        return (float(ft_t[0]), ft_x[0].tolist()) if ft_t.size else None
+
+    def _change_max(self, change: np.ndarray) -> np.ndarray:
+        # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.
+        window = self.config.change_max_frames
+        peak = running_max(values=change, before=self._recent_changes.view, window=window)
+        self._recent_changes.extend(change)
+        self._recent_changes.keep_last(window - 1)
+        return peak
+
+    def _shift_extremes(self, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # *_shift_min and *_shift_max of the (m, 2) new shifts; keeps the newest for the next call
+        before = self._recent_shifts.view
+        n_before = before.shape[0]
+        k_min, k_max = self.config.shift_min_frames, self.config.change_max_frames
+        low = -running_max(values=-shift, before=-before[max(0, n_before - k_min + 1):],
+                           window=k_min)
+        high = running_max(values=shift, before=before[max(0, n_before - k_max + 1):],
+                           window=k_max)
+        self._recent_shifts.extend(shift)
+        self._recent_shifts.keep_last(max(k_min, k_max) - 1)
+        return low, high
+
+    def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        dec_t, dec_v = self._resampler.push(t=t, values=v)
+        n_blocks = dec_t.size
+        if n_blocks == 0:
+            return np.zeros(0), np.zeros((0, len(self.columns)))
+        mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
+                        np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
+        self._mags.extend(mag)
+        self._mag_ts.extend(dec_t)
+        if self._want_shift:
+            self._vecs.extend(dec_v)
+        first_new = self._n_dec
+        self._n_dec += n_blocks
+        # Frame ends (decimated indices) that fall on the new samples.
+        hop, first_end = self.config.ft_hop, self.first_end
+        lo = max(first_new, first_end)
+        start_j = -(-(lo - first_end) // hop)
+        ends = first_end + hop * np.arange(start_j, (self._n_dec - 1 - first_end) // hop + 1)
+        if ends.size:
+            feats = self._features(ends - self._mag_start)
+            times = self._mag_ts.view[ends - self._mag_start]
+        else:
+            feats, times = np.zeros((0, len(self.columns))), np.zeros(0)
+        self._mag_ts.keep_last(self.history)
+        if self._want_shift:
+            self._vecs.keep_last(self.history)
+        self._mag_start += self._mags.keep_last(self.history)
+        return times, feats
+
+    def _features(self, ends: np.ndarray) -> np.ndarray:
+        cfg = self.config
+        n = cfg.ft_window
+        m = ends.size
+        # |F| and |T| windows side by side: one DFT call for both signals.
+        mags = self._mags.view
+        windows = mags[(ends - n + 1)[:, None] + self._offsets]             # (m, n, 2)
+        # Contiguous whatever m is: numpy sums strided rows in another order, and a frame's
+        # features must not depend on how many frames one call computes.
+        frames = np.ascontiguousarray(windows.transpose(2, 0, 1).reshape(2 * m, n))
+        spectra = spectral.magnitude_spectrum(frames=frames, window_fn=cfg.ft_window_fn,
+                                              detrend=cfg.ft_detrend)
+        # Divided by their maxima once for both calls (each would do it again).
+        scaled = spectral.max_normalised(spectra=spectra)
+        centroid, spread = spectral.spectral_centroid_spread(spectra=scaled, window_length=n,
+                                                             scaled=True)
+        en = spectral.sum_normalised(spectra=scaled, scaled=True).reshape(2, m, -1)
+        prev = np.empty_like(en)
+        prev[:, 1:] = en[:, :-1]
+        prev[:, 0] = en[:, 0] if self._prev_en is None else self._prev_en
+        flux = spectral.spectral_flux(normalised=en.reshape(2 * m, -1),
+                                      previous=prev.reshape(2 * m, -1))
+        self._prev_en = en[:, -1].copy()
+        out = np.empty((m, len(self.columns)))
+        out[:, 0], out[:, 1], out[:, 2] = centroid[:m], spread[:m], flux[:m]
+        out[:, 3], out[:, 4], out[:, 5] = centroid[m:], spread[m:], flux[m:]
+        derived = {}
+        if self.use_delta:
+            # |F| and |T| side by side; the newest samples' mean serves both families
+            recent = window_mean(signal=mags, ends=ends, window=cfg.delta_window)
+            lagged, wanted = ends - cfg.delta_lag, set(self.use_delta)
+            if wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'}:
+                change = recent - window_mean(signal=mags, ends=lagged,
+                                              window=cfg.delta_window)
+                derived.update(with_angle(('force_delta', 'torque_delta', 'ft_delta_angle'),
+                                          change))
+            if wanted & set(CHANGE_FEATURES):
+                change = recent - window_median(signal=mags, ends=lagged,
+                                                window=cfg.baseline_window)
+                derived.update(with_angle(('force_change', 'torque_change', 'ft_change_angle'),
+                                          change))
+                if self._want_change_max:
+                    peak = self._change_max(change)
+                    derived['force_change_max'], derived['torque_change_max'] = peak.T
+            if self._want_shift:
+                vecs = self._vecs.view
+                shift = vector_shift(
+                    recent=window_mean(signal=vecs, ends=ends, window=cfg.delta_window),
+                    baseline=window_median(signal=vecs, ends=ends - cfg.shift_lag,
+                                           window=cfg.shift_window))
+                low, high = self._shift_extremes(shift)
+                derived['force_shift'], derived['torque_shift'] = shift.T
+                derived['force_shift_min'], derived['torque_shift_min'] = low.T
+                derived['force_shift_max'], derived['torque_shift_max'] = high.T
+        for col, name in enumerate(self.use_delta, start=6):
+            out[:, col] = derived[name]
+        return out
