@@ -29,8 +29,8 @@ from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              ORIGINAL_SETS, ranges_markdown, REAL_SOUND_SETS,
                                              resolve_conditions)
-from contact_detector.sim.trial import (G, PHASES, simulate_trial, simulate_trials,
-                                        STOP_TORQUE_NM)
+from contact_detector.sim.loads import G, STOP_TORQUE_NM
+from contact_detector.sim.trial import PHASES, simulate_trial, simulate_trials
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
