@@ -60,7 +60,17 @@ class Hit:
 def plan_hits(*, kind: str, count: int, rng: np.random.Generator, p: TrialParams,
               tl: Timeline, stop_est: float, R: np.ndarray, q: FamilyParams,
               r_obj: np.ndarray) -> list[Hit]:
-    """Place ``count`` hits of ``kind`` (see module doc); times relative to the trial start."""
+    """
+    Place ``count`` events of ``kind``; times relative to their anchor.
+
+    ``kind`` is one of :data:`contact_detector.sim.trial.HIT_KINDS` ('mixed' draws one of
+    :data:`~contact_detector.sim.conditions.EVENT_KINDS` per event). Each event falls in a
+    window drawn by probability: the arm moving in the air, before the motion, in contact
+    (after the nominal stop ``stop_est``), after the retreat, and for table knocks, set-downs
+    and touches also while pushing; events keep :data:`MIN_HIT_GAP_S` apart (one without room
+    is dropped). Brushes happen only while the arm moves. ``R`` (world -> sensor) and ``r_obj``
+    (m) orient and place the forces.
+    """
     if kind == 'none':
         return []
     settle_rel = (p.stop_latency_s + p.stop_decel_s + p.settle_s)
