@@ -28,7 +28,7 @@ import sys
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location('lint_fix', ROOT / 'tools' / 'lint_fix.py')
 lint_fix = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(lint_fix)

@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 CONFIG = FeatureConfig(extra_features=('force_delta',))
 
 

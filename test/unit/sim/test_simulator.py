@@ -435,7 +435,7 @@ def test_plot_writes_png(sim_dir, tmp_path):
 
 
 def test_docs_table_matches_the_ranges():
-    docs = Path(__file__).resolve().parent.parent / 'docs' / 'simulator.md'
+    docs = Path(__file__).resolve().parents[3] / 'docs' / 'simulator.md'
     assert ranges_markdown() in docs.read_text(encoding='utf-8')
 
 
