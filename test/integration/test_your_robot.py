@@ -33,6 +33,8 @@ from contact_detector.sim.bag_writer import write_trial_bag
 import pytest
 from rosbags.rosbag1 import Reader
 
+pytestmark = pytest.mark.slow   # simulates recordings, trains, runs the tools/ scripts
+
 ROOT = Path(__file__).resolve().parents[2]
 N_RECORDINGS = 3
 

@@ -39,7 +39,7 @@ UNDER_COLCON = ['test/test_flake8.py', 'test/test_pep257.py', 'test/test_copyrig
                 'test/unit/io/test_cdr.py', 'test/unit/io/test_messages.py',
                 'test/unit/model/test_compiled_forest.py', 'test/unit/model/test_bundle.py']
 
-pytestmark = pytest.mark.colcon
+pytestmark = [pytest.mark.colcon, pytest.mark.slow]
 
 
 @pytest.mark.skipif(shutil.which('colcon', path=str(Path(sys.executable).parent)) is None,
