@@ -16,14 +16,14 @@
 Latency and CPU share of the live node at 16 kHz / 44.1 kHz audio with 100 Hz F/T and 1 kHz.
 
 Two measurements per input configuration (10 ms audio chunks, one wrench sample per message,
-the simulated trial of test/test_e2e_node.py), medians over the repeats:
+the simulated trial of test/e2e/test_e2e_node.py), medians over the repeats:
 
 1. Replay, in this process: the node's callbacks are called directly with real rclpy messages,
    ``/clock`` time set to each message's log time (no DDS, no executor). Gives the node's own
    work: CPU time / trial duration, the node's latency (callback entry to the return of the
    last ``contact`` publish, wall clock) and the CPU time per callback (unaffected by other
    processes taking the core).
-2. Live: three processes on loopback DDS as in test/test_e2e_node.py: the trial publisher at
+2. Live: three processes on loopback DDS as in test/e2e/test_e2e_node.py: the trial publisher at
    the real rate (best-effort sensor-data QoS), the node (``_serve`` below, default
    parameters) and a listener. Gives the node process's CPU time / wall time while the trial
    streams (psutil, start-up excluded), the node's callback latency, and end to end: the

@@ -19,27 +19,27 @@ A 10-tree forest is a noisy estimator: the same recipe trained with another rand
 the count of premature releases on 360 held-out trials by several, so one trained forest cannot
 tell two feature sets apart. For each feature setting and each seed this script trains the
 paper's forest (10 trees, ``max_features='sqrt'``) on all training trials and scores the rules
-on the held-out folders, summed over the seeds. It is how the extras, the change windows and
-the rule in docs/sweep.md were chosen.
+on the held-out folders, summed over the seeds. Each comparison reproduces the table of one
+decision note (docs/decisions/2026-11-22-*.md); the shipped settings are now chosen by
+``contact-detector sweep --lofo`` (docs/sweep.md).
 
-``--compare features`` (round 2): subsets of the eight extras with round 2's change windows,
-features computed once.
-``--compare deltas`` (round 3): the shipped features with other ``delta_window`` /
-``delta_lag`` (the F/T change is the newest ``delta_window`` samples against the samples
-``delta_lag`` earlier), features computed once per setting.
-``--compare sustain`` (rounds 3 and 4): the shipped features, the slow path's threshold and
-length.
-``--compare audio`` (round 4): round 3's features with and without the audio onset features
-``audio_rise_db`` / ``audio_peak_gap_db`` (and ``rise_frames``), features computed once per
-``rise_frames``.
-``--compare changemax`` (round 5): round 4's features with and without ``force_change_max`` /
-``torque_change_max`` (and ``change_max_frames``), features computed once per
-``change_max_frames``; round 4's rule with the slow path at 0.5 (its default), 0.4 and 0.3.
-``--compare conditions`` (round 5): held-out *conditions* over several seeds (the one-forest
-ablation of ``sweep --ablation`` cannot tell one or two trials apart). For each of heavy, soft,
-noisy and gain, train on the other condition sets of the training folder and the *first*
-held-out folder, and test on that condition's trials of the *other* held-out folders; round 4's
-features against the shipped ones, slow path at 0.5 and 0.3.
+``--compare features`` (release-at-p095-with-slow-path): subsets of the eight extras with the
+earlier change windows (``delta_window`` 3, ``delta_lag`` 10), features computed once.
+``--compare deltas`` (newest-sample-for-the-ft-change): the eight extras with other
+``delta_window`` / ``delta_lag`` (the F/T change is the newest ``delta_window`` samples against
+the samples ``delta_lag`` earlier), features computed once per setting.
+``--compare sustain``: the shipped features, the slow path's threshold and length.
+``--compare audio`` (audio-onset-features): the eight extras with and without the audio onset
+features ``audio_rise_db`` / ``audio_peak_gap_db`` (and ``rise_frames``), features computed
+once per ``rise_frames``.
+``--compare changemax`` (recent-maximum-of-the-ft-change): the ten extras with and without
+``force_change_max`` / ``torque_change_max`` (and ``change_max_frames``), features computed
+once per ``change_max_frames``; the rule with the slow path at 0.5, 0.4 and 0.3.
+``--compare conditions``: held-out *conditions* over several seeds (the one-forest ablation of
+``sweep --ablation`` cannot tell one or two trials apart). For each of heavy, soft, noisy and
+gain, train on the other condition sets of the training folder and the *first* held-out
+folder, and test on that condition's trials of the *other* held-out folders; the ten extras
+against the ten plus ``*_change_max``, slow path at 0.5 and 0.3.
 
     python benchmarks/feature_check.py data/train data/heldout22 data/heldout33 \
         data/heldout55 --seeds 0,1,2,3 --jobs 2 [--compare deltas]
@@ -61,66 +61,66 @@ import numpy as np
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
 CHANGE = ('force_change', 'torque_change', 'ft_change_angle')
-#: The eight extras of rounds 2 and 3 (round 4 added the two audio onset features).
+#: The eight extras (the paper's seven features plus these; no audio onset features).
 EIGHT = BEFORE + ('ft_delta_angle',) + CHANGE
 ONSET = ('audio_rise_db', 'audio_peak_gap_db')
-#: Round 5's F/T features: the recent maximum of the two changes.
+#: The recent maximum of the two F/T changes.
 CHANGE_MAX = ('force_change_max', 'torque_change_max')
-#: The shipped rule since round 2, written out: the tables in docs/sweep.md do not move with
-#: DEFAULT_RULE.
-ROUND2_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
+#: The rule of the decision notes, with the slow path at 0.5, written out: the tables do not
+#: move with DEFAULT_RULE.
+SLOW05_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                            sustain_frames=15, sustain_threshold=0.5)
 #: Its fast path without unanimity: 9 of the 10 trees.
-FAST_RULE = replace(ROUND2_RULE, threshold=0.9)
-#: Round 3's features (the eight extras, the shortened change windows).
-ROUND3 = replace(DEFAULT_FEATURES, extra_features=EIGHT)
-#: Round 2's change windows (round 3 shortened them); ``--compare features`` reproduces round 2.
-ROUND2 = replace(ROUND3, delta_window=3, delta_lag=10)
+FAST_RULE = replace(SLOW05_RULE, threshold=0.9)
+#: The eight extras with the shipped change windows (``delta_window`` 1, ``delta_lag`` 5).
+EIGHT_1_5 = replace(DEFAULT_FEATURES, extra_features=EIGHT)
+#: The eight extras with the earlier change windows (``delta_window`` 3, ``delta_lag`` 10).
+EIGHT_3_10 = replace(EIGHT_1_5, delta_window=3, delta_lag=10)
 
 
 def feature_settings() -> List[FeatureSetting]:
-    """Feature subsets of round 2's configuration, named by what they add."""
+    """Feature subsets with the earlier change windows, named by what they add."""
     def subset(name: str, extras: tuple) -> FeatureSetting:
-        return FeatureSetting(name, ROUND2, DEFAULT_LABELS,
+        return FeatureSetting(name, EIGHT_3_10, DEFAULT_LABELS,
                               columns=PAPER_FEATURES + extras)
     return [
         subset('four extras (the previous default)', BEFORE),
         subset('four extras + ft_delta_angle', BEFORE + ('ft_delta_angle',)),
         subset('median-baseline changes instead of the deltas', BEFORE[:2] + CHANGE),
-        subset('all eight extras (round 2)', EIGHT),
+        subset('all eight extras', EIGHT),
     ]
 
 
 def feature_rules() -> List[DecisionRule]:
-    """Return the round-1 default, the shipped rule and its faster and stricter neighbours."""
+    """Return the first default (p >= 0.7 x2), the p >= 0.95 rule and its neighbours."""
     slow = {'sustain_frames': 15, 'sustain_threshold': 0.5}
     return [DecisionRule(threshold=0.7, confirm_frames=2),
             DecisionRule(threshold=0.85, **slow),
             DecisionRule(threshold=0.95),
-            ROUND2_RULE]
+            SLOW05_RULE]
 
 
 def sustain_rules() -> List[DecisionRule]:
     """Return the slow path (quiet contacts) with lower thresholds and a longer mean."""
-    return [replace(ROUND2_RULE, sustain_threshold=0.5),
-            replace(ROUND2_RULE, sustain_threshold=0.4),
-            replace(ROUND2_RULE, sustain_threshold=0.3),
-            replace(ROUND2_RULE, sustain_frames=20, sustain_threshold=0.4)]
+    return [replace(SLOW05_RULE, sustain_threshold=0.5),
+            replace(SLOW05_RULE, sustain_threshold=0.4),
+            replace(SLOW05_RULE, sustain_threshold=0.3),
+            replace(SLOW05_RULE, sustain_frames=20, sustain_threshold=0.4)]
 
 
 def delta_configs() -> List[tuple]:
-    """(name, config): the round-2 windows, round 3's and their neighbours (eight extras)."""
+    """(name, config): earlier and shipped change windows, and neighbours (eight extras)."""
     def windows(window: int, lag: int) -> FeatureConfig:
-        return replace(ROUND3, delta_window=window, delta_lag=lag)
-    return [('delta_window 3, delta_lag 10 (round 2)', windows(3, 10)),
+        return replace(EIGHT_1_5, delta_window=window, delta_lag=lag)
+    return [('delta_window 3, delta_lag 10 (earlier)', windows(3, 10)),
             ('delta_window 2, delta_lag 10', windows(2, 10)),
             ('delta_window 1, delta_lag 10', windows(1, 10)),
-            ('delta_window 1, delta_lag 5 (round 3, shipped)', windows(1, 5)),
+            ('delta_window 1, delta_lag 5 (shipped)', windows(1, 5)),
             ('delta_window 1, delta_lag 3', windows(1, 3))]
 
 
 def audio_settings(rise_frames: int) -> List[FeatureSetting]:
-    """Round 3's features, plus one or both audio onset features, at one ``rise_frames``."""
+    """Return the eight extras plus one or both audio onset features, at one ``rise_frames``."""
     config = replace(DEFAULT_FEATURES, extra_features=EIGHT + ONSET, rise_frames=rise_frames)
     shipped = rise_frames == DEFAULT_FEATURES.rise_frames
 
@@ -128,14 +128,14 @@ def audio_settings(rise_frames: int) -> List[FeatureSetting]:
         return FeatureSetting(name, config, DEFAULT_LABELS, columns=PAPER_FEATURES + extras)
     if not shipped:
         return [subset(f'+ both, rise_frames {rise_frames}', EIGHT + ONSET)]
-    return [subset('round 3 (eight extras)', EIGHT),
+    return [subset('eight extras', EIGHT),
             subset(f'+ audio_rise_db (rise_frames {rise_frames})', EIGHT + ONSET[:1]),
             subset('+ audio_peak_gap_db', EIGHT + ONSET[1:]),
             subset(f'+ both (shipped, rise_frames {rise_frames})', EIGHT + ONSET)]
 
 
 def changemax_settings(frames: int) -> List[FeatureSetting]:
-    """Round 4's features, with the two ``*_change_max`` features at one window."""
+    """Return the ten extras with and without the two ``*_change_max`` features, one window."""
     config = replace(DEFAULT_FEATURES, extra_features=EIGHT + ONSET + CHANGE_MAX,
                      change_max_frames=frames)
 
@@ -144,7 +144,7 @@ def changemax_settings(frames: int) -> List[FeatureSetting]:
     if frames != DEFAULT_FEATURES.change_max_frames:
         return [subset(f'+ *_change_max, change_max_frames {frames}',
                        EIGHT + ONSET + CHANGE_MAX)]
-    return [subset('round 4 (ten extras)', EIGHT + ONSET),
+    return [subset('ten extras', EIGHT + ONSET),
             subset(f'+ *_change_max (shipped, change_max_frames {frames})',
                    EIGHT + ONSET + CHANGE_MAX)]
 
@@ -214,8 +214,8 @@ def main() -> int:
           'latency median [ms] |')
     print('|---|---|---|---|---|---|---|')
     if args.compare == 'features':
-        train = _frames([args.train], ROUND2, args.jobs)
-        heldout = _frames(args.heldout, ROUND2, args.jobs)
+        train = _frames([args.train], EIGHT_3_10, args.jobs)
+        heldout = _frames(args.heldout, EIGHT_3_10, args.jobs)
         for setting in feature_settings():
             _rows(setting, train, heldout, feature_rules(), seeds, args.jobs)
         return 0
@@ -227,30 +227,30 @@ def main() -> int:
         return 0
     if args.compare == 'audio':
         _groups([audio_settings(r) for r in (DEFAULT_FEATURES.rise_frames, 1, 3)],
-                [ROUND2_RULE, FAST_RULE], args, seeds)
+                [SLOW05_RULE, FAST_RULE], args, seeds)
         return 0
     if args.compare == 'conditions':
-        rules = [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.3)]
+        rules = [replace(SLOW05_RULE, sustain_threshold=th) for th in (0.5, 0.3)]
         pool = _frames([args.train, args.heldout[0]], DEFAULT_FEATURES, args.jobs)
         test = _frames(args.heldout[1:], DEFAULT_FEATURES, args.jobs)
         for condition in ('heavy', 'soft', 'noisy', 'gain'):
             fit = [f for f in pool if f.truth.condition != condition]
             left_out = [f for f in test if f.truth.condition == condition]
-            for name, extras in (('round 4', EIGHT + ONSET),
-                                 ('shipped (round 5)', EIGHT + ONSET + CHANGE_MAX)):
+            for name, extras in (('ten extras', EIGHT + ONSET),
+                                 ('+ *_change_max', EIGHT + ONSET + CHANGE_MAX)):
                 setting = FeatureSetting(f'{name}, {condition} left out', DEFAULT_FEATURES,
                                          DEFAULT_LABELS, columns=PAPER_FEATURES + extras)
                 _rows(setting, fit, left_out, rules, seeds, args.jobs)
         return 0
     if args.compare == 'changemax':
         _groups([changemax_settings(k) for k in (DEFAULT_FEATURES.change_max_frames, 30, 80)],
-                [replace(ROUND2_RULE, sustain_threshold=th) for th in (0.5, 0.4, 0.3)],
+                [replace(SLOW05_RULE, sustain_threshold=th) for th in (0.5, 0.4, 0.3)],
                 args, seeds)
         return 0
     for name, config in delta_configs():
         setting = FeatureSetting(name, config, DEFAULT_LABELS)
         _rows(setting, _frames([args.train], config, args.jobs),
-              _frames(args.heldout, config, args.jobs), [ROUND2_RULE, FAST_RULE], seeds,
+              _frames(args.heldout, config, args.jobs), [SLOW05_RULE, FAST_RULE], seeds,
               args.jobs)
     return 0
 

@@ -26,6 +26,7 @@ def _package_root(monkeypatch):
     monkeypatch.chdir(Path(__file__).resolve().parents[1])
 
 
+@pytest.mark.slow
 @pytest.mark.flake8
 @pytest.mark.linter
 def test_flake8():

@@ -3,7 +3,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
-# Ubuntu 24.04's library versions, for test/test_ubuntu2404.py (cached by a stamp file).
+# Ubuntu 24.04's library versions, for test/e2e/test_ubuntu2404.py (cached by a stamp file).
 "$root/tools/ubuntu2404_env.sh"
 source "$root/tools/ros_env.sh"
 cd "$root"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Create or update .venv-noble: the Python library versions of a stock Ubuntu 24.04 (noble)
-# ROS 2 Jazzy install, for test/test_ubuntu2404.py. Idempotent; re-installs only when this
+# ROS 2 Jazzy install, for test/e2e/test_ubuntu2404.py. Idempotent; re-installs only when this
 # script or setup.py changed (stamp file, as setup.sh).
 #   numpy 1.26.4, scipy 1.11.4, scikit-learn 1.4.1.post1, joblib 1.3.2, PyYAML 6.0.1 (the apt
 #   python3-* versions), rclpy + common_interfaces from the ros-jazzy PyPI wheels (as setup.sh's

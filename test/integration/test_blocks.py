@@ -37,6 +37,8 @@ from contact_detector.sim.trial import simulate_trial
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow   # simulates and decides whole recordings
+
 
 @pytest.fixture(scope='module')
 def bundle():

@@ -57,6 +57,8 @@ import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier
 
+pytestmark = pytest.mark.slow   # hypothesis: thousands of examples per test
+
 RATE = 16000
 FT_RATE = 100.0
 CHUNK = 160

@@ -54,7 +54,7 @@ from std_msgs.msg import Bool
 
 pytestmark = pytest.mark.rclpy
 
-HERE = Path(__file__).resolve().parent
+TEST_DIR = Path(__file__).resolve().parents[1]  # test/: the helper scripts
 LATENCY_BUDGET_S = 0.3
 FAULTS_A = 'nan,empty,huge,backwards,duplicate,future,burst,ft100ms,jump'
 FAULTS_B = 'ft2s,audio600ms,nan_late'
@@ -135,14 +135,14 @@ def test_faults_against_the_live_node(model, tmp_path):
         assert listener.set_parameter('corrupt_holdoff_s', 0.25).successful
 
         # 2. Publisher A: faults in the air, then it crashes.
-        pub_a = _start([str(HERE / 'fault_publisher.py'), '--out', str(tmp_path / 'a.json'),
+        pub_a = _start([str(TEST_DIR / 'fault_publisher.py'), '--out', str(tmp_path / 'a.json'),
                         '--faults', FAULTS_A, '--die-at', '-2.8'], tmp_path / 'a.log')
         publishers.append(pub_a)
         listener.spin_until(lambda: pub_a.poll() is not None, 40.0, 'publisher A')
         assert pub_a.returncode == -signal.SIGKILL, (tmp_path / 'a.log').read_text()
         dead_at = time.time()
         # 3. Publisher B: the robot tries again.
-        pub_b = _start([str(HERE / 'fault_publisher.py'), '--out', str(tmp_path / 'b.json'),
+        pub_b = _start([str(TEST_DIR / 'fault_publisher.py'), '--out', str(tmp_path / 'b.json'),
                         '--faults', FAULTS_B, '--stop-at', '1.5'], tmp_path / 'b.log')
         publishers.append(pub_b)
         listener.spin_until(lambda: pub_b.poll() is not None, 40.0, 'publisher B')
@@ -205,7 +205,7 @@ def test_faults_against_the_live_node(model, tmp_path):
 def test_invalid_parameter_stops_the_node_process(model, param, value, match):
     cmd = [sys.executable, '-m', 'contact_detector.ros.node', '--ros-args',
            '-p', f'model.path:={model}', '-p', f'{param}:={value}']
-    done = subprocess.run(cmd, cwd=HERE.parent, env=dict(os.environ), capture_output=True,
+    done = subprocess.run(cmd, cwd=TEST_DIR.parent, env=dict(os.environ), capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 1, done.stderr
     assert 'cannot start' in done.stderr and match in done.stderr, done.stderr

@@ -30,6 +30,8 @@ from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
+pytestmark = pytest.mark.slow   # writes and reads bags
+
 WS = 'geometry_msgs/msg/WrenchStamped'
 I16 = 'std_msgs/msg/Int16MultiArray'
 AD = 'audio_common_msgs/msg/AudioData'

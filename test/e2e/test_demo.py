@@ -21,10 +21,11 @@ import sys
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
+
+pytestmark = pytest.mark.rclpy
 
 
-@pytest.mark.rclpy
 def test_demo_runs_the_node_live_and_passes(tmp_path):
     env = dict(os.environ)   # conftest.py keeps DDS on loopback with this run's domain
     result = subprocess.run(

@@ -330,7 +330,7 @@ def test_invalid_parameters_refused_at_start(context, model, params, match):
 
 def test_params_file_documents_every_parameter(model):
     import yaml
-    path = Path(__file__).resolve().parents[1] / 'params' / 'contact_detector.yaml'
+    path = Path(__file__).resolve().parents[2] / 'params' / 'contact_detector.yaml'
     tree = yaml.safe_load(path.read_text())['/**']['ros__parameters']
 
     def flat(node, prefix=''):
@@ -453,7 +453,7 @@ def test_missing_audio_common_package(context, model):
 
 def test_main_exits_non_zero_with_a_clear_message(tmp_path):
     env = dict(os.environ)
-    repo = Path(__file__).resolve().parents[1]
+    repo = Path(__file__).resolve().parents[2]
     cmd = [sys.executable, '-m', 'contact_detector.ros.node', '--ros-args',
            '-p', f'model.path:={tmp_path / "missing.npz"}']
     done = subprocess.run(cmd, env=env, cwd=repo, capture_output=True, text=True, timeout=60)

@@ -71,6 +71,7 @@ def test_same_seed_same_trial_and_other_seed_differs():
     assert not np.array_equal(c.audio[:1000], a.audio[:1000])
 
 
+@pytest.mark.slow
 def test_cli_is_deterministic(tmp_path):
     runs = []
     for name in ('a', 'b'):
@@ -269,6 +270,7 @@ def test_default_chunking_and_fixed_chunk_size():
 # -------------------------------------------------------------------------------------- hits
 
 
+@pytest.mark.slow
 def test_hit_placement_across_sets():
     trials = list(simulate_trials(n=36, seed=SEED, conditions=['all']))
     kinds = {c: [] for c in ALL}
@@ -299,6 +301,7 @@ def _first_hit(tr, kind, in_air):
                  and h.t < tr.onset_t), None)
 
 
+@pytest.mark.slow
 def test_hand_hit_makes_sound_and_ft_pulse():
     checked = 0
     for index in range(8):
@@ -316,6 +319,7 @@ def test_hand_hit_makes_sound_and_ft_pulse():
     assert checked >= 2
 
 
+@pytest.mark.slow
 def test_table_hit_in_air_has_no_ft_only_sound():
     checked = 0
     for index in range(8):
@@ -368,6 +372,7 @@ def test_every_condition_set_generated(sim_dir, manifest):
     assert manifest['settings']['conditions'] == list(ALL)
 
 
+@pytest.mark.slow
 def test_parameters_stay_in_documented_ranges():
     for condition in ALL:
         cond = get_condition(condition)
@@ -427,6 +432,7 @@ def test_manifest_schema(manifest):
     assert manifest['format'] == 'contact_detector.sim.manifest'
 
 
+@pytest.mark.slow
 def test_plot_writes_png(sim_dir, tmp_path):
     out = tmp_path / 'fig.png'
     assert plot_main([str(sim_dir / 'trial_0000'), '-o', str(out)]) == 0
@@ -435,7 +441,7 @@ def test_plot_writes_png(sim_dir, tmp_path):
 
 
 def test_docs_table_matches_the_ranges():
-    docs = Path(__file__).resolve().parent.parent / 'docs' / 'simulator.md'
+    docs = Path(__file__).resolve().parents[3] / 'docs' / 'simulator.md'
     assert ranges_markdown() in docs.read_text(encoding='utf-8')
 
 
@@ -541,6 +547,7 @@ def test_spring_load_passes_through_the_weight_or_stops_partway():
     assert partial >= 1 and beyond >= 1 and crossed_zero >= 1
 
 
+@pytest.mark.slow
 def test_compliant_transfer_is_slow_and_approach_speeds_vary():
     for index in range(4):
         tr = simulate_trial(seed=SEED, index=index, condition='compliant', hits='none')
@@ -563,6 +570,7 @@ def test_compliant_transfer_is_slow_and_approach_speeds_vary():
     assert decel >= 1 and min(speeds) < 0.02 < max(speeds)
 
 
+@pytest.mark.slow
 def test_exogenous_events_in_the_air():
     trials = list(simulate_trials(n=8, seed=SEED, conditions=['exogenous']))
     kinds = {i.kind for tr in trials for i in tr.impacts}

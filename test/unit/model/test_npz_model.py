@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 CONFIG = FeatureConfig(extra_features=('force_delta',))
 
 
@@ -343,6 +343,7 @@ def test_truncated_files_are_refused(saved: Path) -> None:
     assert load_bundle(path=saved).n_estimators == 4
 
 
+@pytest.mark.slow
 def test_flipped_bytes_never_give_a_wrong_model(saved: Path) -> None:
     """Every byte flip is refused, or loads the very forest and metadata the card describes."""
     data = saved.read_bytes()
@@ -406,6 +407,7 @@ def test_forest_arrays_validate_at_construction(saved: Path) -> None:
 
 # ---------------------------------------------------------------------------- shipped model
 
+@pytest.mark.slow
 def test_shipped_model_is_npz_and_loads_without_sklearn_joblib_rosbags_matplotlib(
         tmp_path: Path) -> None:
     """Node import, model load and one live-path detection with those packages made absent."""
@@ -443,6 +445,7 @@ print(len(releases), releases[0] - trial.onset_t if releases else None)
     assert count == '1' and 0.0 <= float(delay) < 0.3, done.stdout
 
 
+@pytest.mark.slow
 def test_run_time_commands_import_no_sklearn_or_joblib() -> None:
     code = ("import sys\nfor n in ('sklearn', 'joblib', 'skops'):\n    sys.modules[n] = None\n"
             'import contact_detector.cli.demo, contact_detector.cli.detect  # noqa: E401\n'
@@ -456,6 +459,7 @@ def test_run_time_commands_import_no_sklearn_or_joblib() -> None:
     assert 'contact_forest.npz' in done.stdout
 
 
+@pytest.mark.slow
 def test_detect_and_evaluate_run_without_sklearn(tmp_path: Path) -> None:
     bags = tmp_path / 'bags'
     subprocess.run([sys.executable, '-m', 'contact_detector.cli.main', 'simulate', str(bags),
@@ -510,6 +514,7 @@ def test_convert_model(tmp_path: Path, fitted: tuple, fmt: str, capsys) -> None:
     assert 'does not exist' in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_convert_model_command_is_registered(tmp_path: Path, fitted: tuple) -> None:
     old = save_bundle(bundle=_bundle(fitted[0]), path=tmp_path / 'old.joblib')
     done = subprocess.run([str(Path(sys.executable).parent / 'contact-detector'),
@@ -526,6 +531,7 @@ def test_default_model_is_the_npz() -> None:
 
 # ---------------------------------------------------------------------------- frame report
 
+@pytest.mark.slow
 def test_frame_report_equals_sklearns_classification_report() -> None:
     from sklearn.metrics import classification_report
     rng = np.random.default_rng(0)

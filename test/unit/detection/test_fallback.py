@@ -65,6 +65,7 @@ def _feed(fb: AudioFallback, trial, *, audio_until=np.inf, audio_from=np.inf) ->
     return frames, releases, active
 
 
+@pytest.mark.slow
 def test_audio_stops_halfway_ft_model_takes_over_and_releases_once(bundles, trial):
     fb = _fallback(bundles)
     stop = trial.onset_t - 1.2            # the audio dies between the two knocks on the hand

@@ -28,6 +28,8 @@ from contact_detector.sim.trial import simulate_trial
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow   # simulates bags, labels and trains
+
 #: (condition, index, storage): different families, a soft and a quiet contact, a ROS 1 bag.
 TRIALS = [('paper', 0, 'sqlite3'), ('soft', 1, 'sqlite3'), ('compliant', 2, 'ros1'),
           ('quiet_contact', 3, 'mcap')]

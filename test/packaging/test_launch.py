@@ -30,7 +30,7 @@ import pytest
 import setup_support
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LAUNCH = ROOT / 'launch' / 'contact_detector.launch.py'
 SHARE = 'share/contact_detector'
 

@@ -33,11 +33,14 @@ import linecache
 from pathlib import Path
 import sys
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / 'benchmarks'))
 
 from bench_soak import make_pool, run_soak  # noqa: E402
 import node_support  # noqa: E402
 import pytest  # noqa: E402
+
+# The node mode starts rclpy; both runs take minutes.
+pytestmark = [pytest.mark.rclpy, pytest.mark.slow]
 
 
 @pytest.fixture(scope='module')

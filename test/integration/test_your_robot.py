@@ -33,7 +33,9 @@ from contact_detector.sim.bag_writer import write_trial_bag
 import pytest
 from rosbags.rosbag1 import Reader
 
-ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.slow   # simulates recordings, trains, runs the tools/ scripts
+
+ROOT = Path(__file__).resolve().parents[2]
 N_RECORDINGS = 3
 
 

@@ -140,6 +140,7 @@ def _upsampled(trial, rate):
                                wrench_log_t=None)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('index', [0, 1])
 def test_simulated_trials_at_every_rate_are_detected_like_at_100_hz(tmp_path, index):
     make, stream = detect_cli.build_detector_factory(model=None, params_file=None,

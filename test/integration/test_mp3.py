@@ -28,6 +28,8 @@ import pytest
 import soundfile
 from test_discovery import AD, AI, ROS_DRIVERS_MSGS, store_with, wrench_series, write_bag
 
+pytestmark = pytest.mark.slow   # writes and decodes mp3 bags
+
 T_START_NS = 1_700_000_000 * 10**9
 CLICK_S = 1.0
 

@@ -30,6 +30,8 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
+pytestmark = pytest.mark.slow   # writes bags
+
 AUDIO_DATA = 'audio_common_msgs/msg/AudioData'
 
 

@@ -48,6 +48,8 @@ from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
+pytestmark = pytest.mark.slow   # simulates bags, runs the commands, trains
+
 SEED = 11
 N_TRIALS = 8
 AUDIO_DATA = 'audio_common_msgs/msg/AudioData'

@@ -32,7 +32,7 @@ import pytest
 
 pytestmark = pytest.mark.rclpy
 
-HERE = Path(__file__).resolve().parent
+TEST_DIR = Path(__file__).resolve().parents[1]  # test/: the helper scripts
 #: Largest accepted delay from the true onset to the release message, s.
 LATENCY_BUDGET_S = 0.3
 
@@ -44,14 +44,14 @@ _stop = node_support.stop_process
 def test_release_after_onset_across_processes(model, tmp_path):
     pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
                                    tmp_path / 'stop')
-    params = HERE.parent / 'params' / 'contact_detector.yaml'
+    params = TEST_DIR.parent / 'params' / 'contact_detector.yaml'
     node = _start(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
                    '-p', f'model.path:={model}'], tmp_path / 'node.log')
     ready = tmp_path / 'listener_ready'
-    listener = _start([str(HERE / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
+    listener = _start([str(TEST_DIR / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
                        '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
                       tmp_path / 'listen.log')
-    publisher = _start([str(HERE / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+    publisher = _start([str(TEST_DIR / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
                         '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
     try:
         publisher.wait(timeout=75)

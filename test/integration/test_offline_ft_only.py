@@ -29,6 +29,8 @@ from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
 import pytest
 
+pytestmark = pytest.mark.slow   # simulates bags, runs the commands, trains
+
 N_TRIALS = 8
 
 

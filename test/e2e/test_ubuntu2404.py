@@ -35,8 +35,8 @@ import pytest
 
 pytestmark = pytest.mark.rclpy
 
-HERE = Path(__file__).resolve().parent
-REPO = HERE.parent
+TEST_DIR = Path(__file__).resolve().parents[1]  # test/: the helper scripts
+REPO = TEST_DIR.parent
 NOBLE_PYTHON = Path(os.environ.get('CONTACT_DETECTOR_NOBLE_VENV', REPO / '.venv-noble')) \
     / 'bin' / 'python'
 NOBLE_VERSIONS = {'numpy': '1.26.4', 'scipy': '1.11.4', 'scikit-learn': '1.4.1.post1',
@@ -79,10 +79,10 @@ def test_node_detects_a_live_trial_with_the_shipped_model(tmp_path: Path) -> Non
     node = _noble(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file',
                    str(params)], tmp_path / 'node.log')
     ready = tmp_path / 'listener_ready'
-    listener = _noble([str(HERE / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
+    listener = _noble([str(TEST_DIR / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
                        '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
                       tmp_path / 'listen.log')
-    publisher = _noble([str(HERE / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+    publisher = _noble([str(TEST_DIR / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
                         '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
     try:
         publisher.wait(timeout=75)

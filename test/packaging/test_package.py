@@ -27,7 +27,7 @@ import xml.etree.ElementTree as ET
 
 import setup_support
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: Top-level import name -> rosdep key (Jazzy, Ubuntu 24.04). The python keys are those of
 #: rosdistro's rosdep/python.yaml; the others are ROS packages of Jazzy.
@@ -84,7 +84,7 @@ def declared(*tags: str) -> set:
 def top_level_imports(paths) -> dict:
     """Absolute imports that are neither the standard library nor local: name -> files."""
     local = {'contact_detector'}
-    local |= {p.stem for folder in ('test', 'benchmarks') for p in (ROOT / folder).glob('*.py')}
+    local |= {p.stem for folder in ('test', 'benchmarks') for p in (ROOT / folder).rglob('*.py')}
     found: dict = {}
     for path in paths:
         for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
@@ -118,7 +118,7 @@ def test_every_package_import_is_an_exec_depend():
 
 
 def test_every_test_import_and_tool_is_declared():
-    tests = sorted((ROOT / 'test').glob('*.py'))
+    tests = sorted((ROOT / 'test').rglob('*.py'))
     imports = top_level_imports(tests)
     unknown = sorted(set(imports) - set(IMPORT_KEYS) - set(OPTIONAL))
     assert not unknown, f'test imports without a rosdep key in IMPORT_KEYS: {unknown}'

@@ -32,13 +32,14 @@ import sys
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 UNDER_COLCON = ['test/test_flake8.py', 'test/test_pep257.py', 'test/test_copyright.py',
-                'test/test_package.py', 'test/test_launch.py',
-                'test/test_features.py', 'test/test_release.py', 'test/test_cdr.py',
-                'test/test_messages.py', 'test/test_compiled_forest.py', 'test/test_bundle.py']
+                'test/packaging/test_package.py', 'test/packaging/test_launch.py',
+                'test/unit/features/test_features.py', 'test/unit/detection/test_release.py',
+                'test/unit/io/test_cdr.py', 'test/unit/io/test_messages.py',
+                'test/unit/model/test_compiled_forest.py', 'test/unit/model/test_bundle.py']
 
-pytestmark = pytest.mark.colcon
+pytestmark = [pytest.mark.colcon, pytest.mark.slow]
 
 
 @pytest.mark.skipif(shutil.which('colcon', path=str(Path(sys.executable).parent)) is None,
