@@ -60,7 +60,6 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to
                                           embedded_audio_format, wrench_sample)
 from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
                                            load_bundle, ModelBundle)
-from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
                                          declare_parameters, NodeConfig, PARAMS_BY_NAME)
@@ -806,6 +805,11 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     Return the executor ``executor.type`` asks for, with ``node`` added.
 
+    ``single_threaded`` (the default) is rclpy's :class:`SingleThreadedExecutor`: public rclpy
+    API only. ``hot_path`` (opt-in) is :class:`~contact_detector.ros.executor.HotPathExecutor`:
+    less CPU per message, private rclpy API (a warning is logged on an rclpy version it was not
+    checked with).
+
     With ``executor.lazy_wrench``, ``hot_path`` wakes up for audio chunks and for wrench
     messages only while an audio frame waits for F/T data: the wrench messages that arrived
     meanwhile are taken first at the next wake-up (fewer wake-ups, each costing a cold start;
@@ -815,15 +819,25 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     cfg = node.config
     if cfg.executor_type == 'hot_path':
+        # Private rclpy API: imported only when asked for (see its module docstring).
+        from contact_detector.ros.executor import (CHECKED_RCLPY_VERSIONS, HotPathExecutor,
+                                                   rclpy_version)
+        version = rclpy_version()
+        if version not in CHECKED_RCLPY_VERSIONS:
+            node.get_logger().warning(
+                f'executor.type hot_path uses private rclpy API checked with rclpy '
+                f'{", ".join(CHECKED_RCLPY_VERSIONS)}; this is rclpy {version or "(unknown)"}: '
+                'run test/test_hot_path_executor.py, or use executor.type single_threaded')
         # Without audio the wrench stream clocks the frames: never lazy.
         lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench and node.use_audio
                 and cfg.wrench_stamp_source == 'header' else [])
         executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
                                    lazy=lazy, wanted=node.wrench_wanted,
                                    lazy_max_s=min(cfg.executor_poll_s,
-                                                  0.5 * cfg.qos_depth / cfg.wrench_rate))
+                                                  0.5 * cfg.qos_depth / cfg.wrench_rate),
+                                   context=node.context)
     else:
-        executor = SingleThreadedExecutor()
+        executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     return executor
 
