@@ -25,19 +25,15 @@ every 30 simulated seconds after a full collection:
   that keep the last 100 000 processing latencies per callback kind (bounded: ~0.17 MB per
   simulated minute until full after ~20 minutes, 3.3 MB in all; see docs/reliability.md).
 
-The full soak (30+ minutes, RSS and tracemalloc per minute) is
-``python benchmarks/bench_soak.py``.
+The runner is :mod:`contact_detector.ros.soak`; the full soak (30+ minutes, RSS and
+tracemalloc per minute) is ``python benchmarks/bench_soak.py``.
 """
 
 import linecache
-from pathlib import Path
-import sys
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'benchmarks'))
-
-from bench_soak import make_pool, run_soak  # noqa: E402
-import node_support  # noqa: E402
-import pytest  # noqa: E402
+from contact_detector.ros.soak import make_pool, run_soak
+import node_support
+import pytest
 
 
 @pytest.fixture(scope='module')

@@ -13,55 +13,44 @@
 # limitations under the License.
 
 """
-Soak: many simulated minutes of input through the node's processing at full speed; memory.
+Soak runner: many simulated minutes of input through the node's processing at full speed.
 
-Simulated trials (``--pool`` of them, all condition sets in turn: paper, heavy, soft, noisy,
-gain, odd_chunking; random exogenous hits; simulated before the measurement starts) are played
-in turn as one continuous stream, each trial re-armed as the robot would before a placing, and
-fed as fast as the process takes them:
+Simulated trials (:func:`make_pool`: the condition sets of ``wide`` in turn, random exogenous
+hits; simulated before the measurement starts) are played in turn as one continuous stream,
+each trial re-armed as the robot would before a placing, and fed as fast as the process takes
+them (:func:`run_soak`):
 
 * ``detector``: :class:`ContactDetector` directly (``on_audio`` / ``on_wrench`` with the
   node's stamps: audio on receipt, wrench by header), the work of every message;
-* ``node``: a real :class:`ContactDetectorNode` in this process (``use_sim_time``, its clock
-  set to each message's receive time), the messages given to its subscription callbacks as
-  rclpy messages, its outputs published to DDS, ``diagnostics()`` called every simulated
-  second as its timer would.
+* ``node``: a real :class:`~contact_detector.ros.node.ContactDetectorNode` in this process
+  (``use_sim_time``, its clock set to each message's receive time), the messages given to its
+  subscription callbacks as rclpy messages, its outputs published to DDS, ``diagnostics()``
+  called every simulated second as its timer would.
 
-Every simulated minute the resident set size (``/proc/self/statm``) and the memory
-``tracemalloc`` sees (current, and peak since the previous sample) are sampled. Printed: one
-row per minute, then first / last / max and the least-squares slope over minutes 1.. (minute 0
-includes imports and warm-up).
-
-    python benchmarks/bench_soak.py [--minutes 30] [--mode detector|node|both]
-                                    [--pool 24] [--model PATH] [--no-tracemalloc]
-                                    [--json out.json]
-
-The model is the shipped one if it exists, else the small test model (trained first, ~5 s).
+Every ``sample_s`` simulated seconds the resident set size (``/proc/self/statm``) and the
+memory ``tracemalloc`` sees (current, and peak since the previous sample) are sampled.
+Used by ``benchmarks/bench_soak.py`` (30+ minutes) and ``test/test_soak.py`` (the short CI
+version).
 """
 
-import argparse
 from array import array
 from dataclasses import dataclass, field
 import gc
-import json
 import os
 from pathlib import Path
-import sys
-import tempfile
 import time
 import tracemalloc
 from typing import Callable, Iterator, List, Optional
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(REPO / 'test'))
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.model.bundle import ModelBundle
+from contact_detector.sim.conditions import ALIASES
+from contact_detector.sim.messages import message_events
+from contact_detector.sim.trial import simulate_trial
+import numpy as np
 
-from contact_detector.detection.detector import ContactDetector, DetectorSettings  # noqa: E402
-from contact_detector.model.bundle import load_bundle, ModelBundle  # noqa: E402
-from contact_detector.sim.conditions import ALIASES  # noqa: E402
-from contact_detector.sim.trial import simulate_trial  # noqa: E402
-import numpy as np  # noqa: E402
-
+#: The repository (or installation) root, left out of the file names in ``growth_sites``.
+ROOT = Path(__file__).resolve().parents[2]
 PAGE = os.sysconf('SC_PAGE_SIZE')
 MB = 1024.0 * 1024.0
 
@@ -92,14 +81,7 @@ def make_pool(*, n: int, seed: int = 5) -> list:
     for index in range(n):
         trial = simulate_trial(seed=seed, index=index,
                                condition=conditions[index % len(conditions)])
-        events = []
-        starts = np.concatenate([[0], trial.chunk_ends[:-1]])
-        for lo, hi, t in zip(starts, trial.chunk_ends, trial.chunk_log_t):
-            events.append((float(t), 1, int(lo), int(hi)))
-        log_t = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
-        for j, t in enumerate(log_t):
-            events.append((float(t), 0, j, j + 1))
-        events.sort()
+        events = [(e.t, e.kind == 'audio', e.lo, e.hi) for e in message_events(trial=trial)]
         pool.append((trial, events))
     return pool
 
@@ -271,7 +253,7 @@ def run_soak(*, bundle: ModelBundle, minutes: float, mode: str = 'detector',
             n += 1
         result.counts = dict(counts())
         if trace and 'snapshot' in base:
-            here = str(REPO) + os.sep
+            here = str(ROOT) + os.sep
             diff = tracemalloc.take_snapshot().compare_to(base['snapshot'], 'lineno')
             result.growth = [(d.traceback[0].filename, d.traceback[0].lineno, d.size_diff,
                               d.count_diff) for d in diff[:30]]
@@ -310,49 +292,3 @@ def summary(result: SoakResult) -> str:
                  f'{counts.get("audio_dropped", 0)} audio / {counts.get("wrench_dropped", 0)} '
                  f'wrench dropped, {counts.get("callback_errors", 0)} callback errors')
     return '\n'.join(lines)
-
-
-def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--minutes', type=float, default=30.0,
-                        help='simulated minutes per mode (default 30)')
-    parser.add_argument('--mode', choices=('detector', 'node', 'both'), default='both')
-    parser.add_argument('--model', default='', help='model file (default: shipped or test)')
-    parser.add_argument('--no-tracemalloc', action='store_true',
-                        help='RSS only (tracemalloc slows Python down about 2x)')
-    parser.add_argument('--pool', type=int, default=24,
-                        help='distinct simulated trials, played in turn (default 24)')
-    parser.add_argument('--json', default='', help='also write the samples here')
-    args = parser.parse_args(argv)
-
-    if args.model:
-        model = Path(args.model)
-    else:
-        import node_support
-        model = node_support.model_path(Path(tempfile.mkdtemp(prefix='soak_')))
-    bundle = load_bundle(path=model)
-    print(f'model {bundle.model_id} ({model})', flush=True)
-    pool = make_pool(n=args.pool)
-    seconds = sum(events[-1][0] - events[0][0] for _, events in pool)
-    print(f'{len(pool)} trials simulated ({seconds:.0f} s), played in turn', flush=True)
-    modes = ('detector', 'node') if args.mode == 'both' else (args.mode,)
-    results = []
-    for mode in modes:
-        def progress(s: Sample, mode=mode) -> None:
-            print(f'  {mode} minute {s.minute:5.1f}: RSS {s.rss_mb:7.1f} MB, traced '
-                  f'{s.traced_mb:7.3f} MB (peak {s.traced_peak_mb:7.3f}), wall {s.wall_s:6.1f} s',
-                  flush=True)
-        result = run_soak(bundle=bundle, minutes=args.minutes, mode=mode, pool=pool,
-                          trace=not args.no_tracemalloc, progress=progress)
-        results.append(result)
-        print(summary(result), flush=True)
-    if args.json:
-        Path(args.json).write_text(json.dumps([{
-            'mode': r.mode, 'trials': r.trials, 'counts': r.counts,
-            'samples': [s.__dict__ for s in r.samples]} for r in results], indent=1))
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
