@@ -179,7 +179,7 @@ PARAMS: Sequence[ParamSpec] = (
               -100.0, 100.0, read_only=False),
     ParamSpec('gripper.duration_s', 0.5, 'time_from_start of the trajectory point, s.',
               0.0, 60.0, read_only=False),
-    ParamSpec('executor.type', 'single_threaded', "Executor run by main(): "
+    ParamSpec('executor.type', 'single_threaded', 'Executor run by main(): '
               "'single_threaded' is rclpy's SingleThreadedExecutor (public rclpy API only); "
               "'hot_path' (opt-in) serves the input subscriptions from a small wait set, "
               'less CPU per message, built on private rclpy API checked with the rclpy '
