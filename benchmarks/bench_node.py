@@ -200,7 +200,7 @@ def _pair(runs, key) -> str:
 
 
 def _wrench_msg(t: float, force, torque):
-    """A ``WrenchStamped`` of one sample stamped ``t`` (s)."""
+    """Return a ``WrenchStamped`` of one sample stamped ``t`` (s)."""
     from builtin_interfaces.msg import Time
     from geometry_msgs.msg import WrenchStamped
 
