@@ -37,7 +37,14 @@ Interface (all names relative, remappable)::
                 ~/reset              std_srvs/srv/Trigger
 
 The wiring (:class:`DetectorWiring`) is shared with the managed (lifecycle) variant,
-:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``.
+:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``. Next to it: parameters in
+:mod:`.params`, the audio-format negotiation in :mod:`.audio_format`, ``/diagnostics`` in
+:mod:`.diagnostics`, the opt-in executor in :mod:`.executor`.
+
+Why over 500 lines: this module is one job, the wiring of one object (set-up and tear-down in
+lifecycle steps, the input callbacks, outputs, services, clock jumps and parameter updates),
+whose methods share that object's state; split further, one object's methods would be spread
+over several files.
 """
 
 from collections import deque
