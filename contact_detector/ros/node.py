@@ -342,12 +342,12 @@ class DetectorWiring(DiagnosticsMixin):
 
     @property
     def audio_format(self) -> AudioFormat:
-        """The format audio chunks are decoded with (see :mod:`.audio_format`)."""
+        """Return the format audio chunks are decoded with (see :mod:`.audio_format`)."""
         return self.negotiation.format
 
     @property
     def audio_refused(self) -> Optional[str]:
-        """Why every audio chunk is dropped (unsupported format), else None."""
+        """Return why every audio chunk is dropped (unsupported format), else None."""
         return self.negotiation.refused
 
     # --- helpers ---------------------------------------------------------------------------------
