@@ -32,13 +32,16 @@ the simulated trial of test/e2e/test_e2e_node.py), medians over the repeats:
    node's latency from the audio message's arrival (DDS reception time) to the return of the
    audio callback that published its frames (wrench messages taken before it included).
 
-    python benchmarks/bench_node.py [--repeats 3] [--model PATH] [--executor single_threaded]
+    python benchmarks/bench_node.py [--repeats 3] [--model PATH]
+                                    [--executors single_threaded,hot_path]
                                     [--gap-ms 4 --replay-only] [--only 44100:100 --live-only]
                                     [--set executor.lazy_wrench=true]
 
-The shipped model is used if it exists (else a small test model is trained first). On a
-machine shared with other work the latency tails measure the scheduler as much as the node:
-compare the CPU time per callback, and read the load average printed in the header.
+With several ``--executors`` the live runs alternate between them (one run of each in turn,
+``--repeats`` rounds), so that they share the machine's load; one row per executor. The model
+is the shipped ``models/contact_forest.npz`` unless ``--model`` is given. On a machine shared
+with other work the latency tails measure the scheduler as much as the node: compare the CPU
+time per callback, and read the load averages printed before and after.
 """
 
 import argparse
@@ -58,6 +61,8 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 HELPER = REPO / 'test' / 'e2e_helper.py'
+SHIPPED_MODEL = REPO / 'models' / 'contact_forest.npz'
+EXECUTORS = ('single_threaded', 'hot_path')
 CONFIGS = ((16000, 100.0), (44100, 100.0), (16000, 1000.0))
 
 
@@ -194,6 +199,21 @@ def _pair(runs, key) -> str:
     return f'{p50:.3f} / {p99:.3f}'
 
 
+def _wrench_msg(t: float, force, torque):
+    """Return a ``WrenchStamped`` of one sample stamped ``t`` (s)."""
+    from builtin_interfaces.msg import Time
+    from geometry_msgs.msg import WrenchStamped
+
+    msg = WrenchStamped()
+    sec = int(np.floor(t))
+    msg.header.stamp = Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+    msg.header.frame_id = 'wrist_ft_sensor_frame'
+    f, m = msg.wrench.force, msg.wrench.torque
+    f.x, f.y, f.z = (float(v) for v in force)
+    m.x, m.y, m.z = (float(v) for v in torque)
+    return msg
+
+
 def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0) -> dict:
     """
     Call the node's callbacks directly with real messages of a trial (no DDS, no executor).
@@ -209,19 +229,18 @@ def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0) -
     from std_msgs.msg import Int16MultiArray
 
     from contact_detector.ros.node import ContactDetectorNode
+    from contact_detector.sim.messages import message_events
     from contact_detector.sim.trial import simulate_trial
-    import node_support
-    from test_node import wrench_msg
 
     trial = simulate_trial(seed=3, index=21, hits='hand', audio_rate=audio_rate,
                            ft_rate=ft_rate, chunk_size=audio_rate // 100)
     messages = []
-    for e in node_support.trial_events(trial):
+    for e in message_events(trial=trial):
         if e.kind == 'audio':
             msg = Int16MultiArray()
             msg.data = trial.audio[e.lo:e.hi]
         else:
-            msg = wrench_msg(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
+            msg = _wrench_msg(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
         messages.append((e.kind, msg, Time(nanoseconds=int(round(e.t * 1e9)))))
     context = Context()
     rclpy.init(context=context, args=['--ros-args', '--log-level', 'warn'])
@@ -271,8 +290,11 @@ def main() -> None:
     parser.add_argument('--audio-rate', type=int, default=16000)
     parser.add_argument('--ft-rate', type=float, default=100.0)
     parser.add_argument('--out', default='')
-    parser.add_argument('--executor', default='hot_path',
-                        choices=('hot_path', 'single_threaded'))
+    parser.add_argument('--executor', default='single_threaded', choices=EXECUTORS,
+                        help=argparse.SUPPRESS)        # _serve: the node's executor.type
+    parser.add_argument('--executors', default='single_threaded',
+                        help='live: comma-separated executor.type values, run alternately '
+                        f'(of {", ".join(EXECUTORS)}; default single_threaded)')
     parser.add_argument('--gap-ms', type=float, default=0.0,
                         help='replay: sleep this long before each callback (cold caches, as '
                         'in a live node); default 0 (back to back)')
@@ -289,16 +311,19 @@ def main() -> None:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_STATIC_PEERS'] = ''
     os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
-    sys.path.insert(0, str(REPO / 'test'))
-    import node_support
+    executors = args.executors.split(',')
+    for name in executors:
+        if name not in EXECUTORS:
+            parser.error(f'--executors: {name!r} is not one of {EXECUTORS}')
     configs = CONFIGS
     if args.only:
         audio_hz, ft_hz = args.only.split(':')
         configs = ((int(audio_hz), float(ft_hz)),)
     work = Path(tempfile.mkdtemp(prefix='bench_node_'))
-    model = args.model or str(node_support.model_path(work))
+    model = args.model or str(SHIPPED_MODEL)
     print(f'node benchmark, model {model}, median of {args.repeats} runs, '
-          f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n')
+          f'{os.cpu_count()} CPUs, load average (1, 5, 15 min) '
+          f'{", ".join(f"{v:.1f}" for v in os.getloadavg())}\n')
 
     print('In-process replay: callbacks called with real messages, no DDS (the work of the '
           f'node itself), {args.gap_ms:g} ms sleep before each callback\n')
@@ -317,23 +342,32 @@ def main() -> None:
     if args.replay_only:
         return
 
-    print(f'\nLive: publisher, node ({args.executor} executor) and listener processes on '
-          'loopback DDS, one simulated trial (~9 s) at the real rate\n')
-    print('| audio | F/T | node CPU, % of one core (sys) | audio callback p50 / p99 (ms) '
-          '| audio arrival -> published p50 / p99 (ms) '
+    print(f'\nLive: publisher, node ({", ".join(executors)} executor, alternating) and '
+          'listener processes on loopback DDS, one simulated trial (~9 s) at the real rate\n')
+    print('| audio | F/T | executor | node CPU, % of one core (sys) | node CPU per run '
+          '| audio callback p50 / p99 (ms) | audio arrival -> published p50 / p99 (ms) '
           '| wrench callback p50 / p99 (ms) | end to end p50 / p99 (ms) '
           '| frames: node / listener / expected, per run |')
-    print('|---|---|---|---|---|---|---|---|')
+    print('|---|---|---|---|---|---|---|---|---|---|')
     for audio_rate, ft_rate in configs:
-        runs = [run_once(model=model, audio_rate=audio_rate, ft_rate=ft_rate, work=work,
-                         executor=args.executor, settings=args.set)
-                for _ in range(args.repeats)]
-        cpu = statistics.median(100 * r['cpu'] for r in runs)
-        sys_cpu = statistics.median(100 * r['sys_cpu'] for r in runs)
-        frames = ', '.join(f'{r["node_frames"]}/{r["frames"]}/{r["expected"]}' for r in runs)
-        print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} ({sys_cpu:.1f}) '
-              f'| {_pair(runs, "audio")} | {_pair(runs, "arrival")} | {_pair(runs, "wrench")} '
-              f'| {_pair(runs, "e2e")} | {frames} |', flush=True)
+        by_executor = {name: [] for name in executors}
+        for _ in range(args.repeats):
+            for name in executors:
+                by_executor[name].append(run_once(
+                    model=model, audio_rate=audio_rate, ft_rate=ft_rate, work=work,
+                    executor=name, settings=args.set))
+        for name, runs in by_executor.items():
+            cpu = statistics.median(100 * r['cpu'] for r in runs)
+            sys_cpu = statistics.median(100 * r['sys_cpu'] for r in runs)
+            each = ', '.join(f'{100 * r["cpu"]:.1f}' for r in runs)
+            frames = ', '.join(f'{r["node_frames"]}/{r["frames"]}/{r["expected"]}'
+                               for r in runs)
+            print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {name} '
+                  f'| {cpu:.1f} ({sys_cpu:.1f}) | {each} | {_pair(runs, "audio")} '
+                  f'| {_pair(runs, "arrival")} | {_pair(runs, "wrench")} '
+                  f'| {_pair(runs, "e2e")} | {frames} |', flush=True)
+    print(f'\nload average (1, 5, 15 min) at the end '
+          f'{", ".join(f"{v:.1f}" for v in os.getloadavg())}')
     print(f'\nmodel id {runs[0]["model_id"]}; publisher lateness p99 '
           f'{runs[0]["late_p99_ms"]:.2f} ms; logs in {work}')
 

@@ -15,12 +15,11 @@
 """
 Shared helpers of the node tests: a small test model and simulated-trial message streams.
 
-Used by test_node.py, test_e2e_node.py, e2e_publisher.py and benchmarks/bench_node.py. The
-model is the shipped ``models/contact_forest.npz`` when it exists, otherwise a small forest
-(8 trees) trained here on features of simulated trials, saved with ``save_bundle``.
+Used by the node tests and test/e2e_helper.py. The model is the shipped
+``models/contact_forest.npz`` when it exists, otherwise a small forest (8 trees) trained here
+on features of simulated trials, saved with ``save_bundle``.
 """
 
-from dataclasses import dataclass
 from datetime import datetime
 import os
 from pathlib import Path
@@ -31,6 +30,7 @@ from typing import List, Optional
 
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.sim.messages import Event, message_events
 from contact_detector.sim.trial import simulate_trial, Trial
 import numpy as np
 
@@ -45,28 +45,10 @@ TEST_RULE = {'threshold': 0.5, 'confirm_frames': 2, 'refractory_s': 1.0}
 _cache: dict = {}
 
 
-@dataclass(frozen=True)
-class Event:
-    """One message of a trial, at its log (receive) time ``t`` (s)."""
-
-    t: float
-    kind: str             # 'audio' or 'wrench'
-    lo: int               # audio: first sample; wrench: sample index
-    hi: int               # audio: end sample (exclusive); wrench: index + 1
-
-
 def trial_events(trial: Trial, *, t_from: float = -np.inf,
                  t_to: float = np.inf) -> List[Event]:
-    """Return the trial's audio chunks and wrench samples in log-time order within a span."""
-    events = []
-    starts = np.concatenate([[0], trial.chunk_ends[:-1]])
-    for lo, hi, t in zip(starts, trial.chunk_ends, trial.chunk_log_t):
-        events.append(Event(float(t), 'audio', int(lo), int(hi)))
-    log_t = trial.wrench_log_t if trial.wrench_log_t is not None else trial.wrench_t
-    for j, t in enumerate(log_t):
-        events.append(Event(float(t), 'wrench', j, j + 1))
-    events.sort(key=lambda e: (e.t, e.kind == 'audio'))
-    return [e for e in events if t_from <= e.t < t_to]
+    """Return the trial's messages in log-time order within a span (see ``message_events``)."""
+    return message_events(trial=trial, t_from=t_from, t_to=t_to)
 
 
 def trial_features(trial: Trial, config: FeatureConfig) -> tuple:

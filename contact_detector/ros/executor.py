@@ -13,7 +13,17 @@
 # limitations under the License.
 
 """
-An executor that serves the sensor subscriptions from a small wait set.
+An opt-in executor that serves the sensor subscriptions from a small wait set.
+
+**Private rclpy API.** It builds its wait set with ``rclpy.impl.implementation_singleton`` (the
+C extension behind rclpy's executors) and reads executor and subscription internals
+(``_guard``, ``_sigint_gc``, ``_context``, ``_is_shutdown``, ``_callback_type``). An rclpy
+update can change any of them, so the node's default executor is rclpy's public
+:class:`~rclpy.executors.SingleThreadedExecutor` and this one runs only with
+``executor.type: hot_path``. It was checked with the rclpy versions in
+:data:`CHECKED_RCLPY_VERSIONS` (``test/test_hot_path_executor.py`` fails on any other, and
+:func:`contact_detector.ros.node.make_executor` logs a warning); this module is imported only
+when that executor is asked for.
 
 rclpy's :class:`~rclpy.executors.SingleThreadedExecutor` rebuilds its wait set from every entity
 of every node (parameter services, QoS event handlers, timers, ...) on each wake-up and wraps
@@ -34,8 +44,10 @@ wrench samples that arrived with an audio chunk are there when the chunk is proc
 """
 
 from contextlib import ExitStack
+from importlib import metadata
 import time
 from typing import Callable, Optional, Sequence
+from xml.etree import ElementTree
 
 from rclpy.context import Context
 from rclpy.exceptions import InvalidHandle
@@ -46,10 +58,32 @@ from rclpy.subscription import Subscription
 
 RCLError = _rclpy.RCLError
 
+#: rclpy versions whose private API this executor was checked with (its tests pass).
+CHECKED_RCLPY_VERSIONS = ('7.1.5',)
+
 #: At most this many stock callbacks are served per poll (bounds a burst of service calls).
 MAX_STOCK_CALLBACKS_PER_POLL = 50
 #: At most this many messages are taken from one subscription per wake-up (bounds a burst).
 MAX_TAKES_PER_WAKE = 1000
+
+
+def rclpy_version() -> Optional[str]:
+    """
+    Return the installed rclpy's version, or None where it cannot be told.
+
+    From the Python distribution's metadata (the PyPI wheels), else from rclpy's
+    ``package.xml`` in the ament index (a ROS installation).
+    """
+    try:
+        return metadata.version('rclpy')
+    except metadata.PackageNotFoundError:
+        pass
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        root = ElementTree.parse(f'{get_package_share_directory("rclpy")}/package.xml')
+    except (ImportError, LookupError, OSError, ElementTree.ParseError):
+        return None         # no ament index, or rclpy not in it
+    return root.findtext('version')
 
 
 class HotPathExecutor(SingleThreadedExecutor):

@@ -37,7 +37,14 @@ Interface (all names relative, remappable)::
                 ~/reset              std_srvs/srv/Trigger
 
 The wiring (:class:`DetectorWiring`) is shared with the managed (lifecycle) variant,
-:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``.
+:mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``. Next to it: parameters in
+:mod:`.params`, the audio-format negotiation in :mod:`.audio_format`, ``/diagnostics`` in
+:mod:`.diagnostics`, the opt-in executor in :mod:`.executor`.
+
+Why over 500 lines: this module is one job, the wiring of one object (set-up and tear-down in
+lifecycle steps, the input callbacks, outputs, services, clock jumps and parameter updates),
+whose methods share that object's state; split further, one object's methods would be spread
+over several files.
 """
 
 from collections import deque
@@ -52,19 +59,19 @@ from typing import Any, Callable, Dict, Optional
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
-from contact_detector.features.resample import rate_mismatch, StampRate
+from contact_detector.features.resample import StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
-                                          AudioFormat, AudioMsgType, check_audio_info, check_stamp,
-                                          embedded_audio_format, wrench_sample)
+                                          AudioFormat, AudioMsgType, check_stamp, wrench_sample)
 from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
                                            load_bundle, ModelBundle)
-from contact_detector.ros.executor import HotPathExecutor
+from contact_detector.ros.audio_format import AudioFormatNegotiation
+from contact_detector.ros.diagnostics import DiagnosticsMixin, InputStream
 from contact_detector.ros.gripper import open_gripper_trajectory
 from contact_detector.ros.params import (config_from_values, current_values,
                                          declare_parameters, NodeConfig, PARAMS_BY_NAME)
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
@@ -90,11 +97,6 @@ LATENCY_HISTORY = 100_000
 NODE_COUNTERS = ('audio_waiting_info', 'audio_refused', 'bad_stamps', 'clock_jumps',
                  'callback_errors', 'detector_rebuilds', 'contact_msgs', 'release_msgs')
 _NUMBERS = re.compile(r'[-+]?\d+(\.\d+)?(e[-+]?\d+)?')
-#: Counters whose increase during a diagnostics period turns the status to WARN.
-WARN_COUNTERS = ('audio_dropped', 'wrench_dropped', 'time_jumps', 'clock_jumps',
-                 'callback_errors', 'audio_waiting_info', 'bad_stamps', 'audio_rate_mismatch',
-                 'nonfinite_frames', 'audio_restarts', 'wrench_restarts', 'stale_frames',
-                 'audio_clipped')
 
 
 def import_audio_types(msg_type: str) -> tuple:
@@ -156,18 +158,7 @@ class _Throttle:
         return self._suppressed.pop(key, 0)
 
 
-class _Stream:
-    """Arrival bookkeeping of one input topic (for rates and staleness in diagnostics)."""
-
-    def __init__(self) -> None:
-        self.last_rx: Optional[float] = None       # node clock, s
-        self.last_stamp: Optional[float] = None    # stamp of the last accepted message, s
-        self.received = 0                           # messages since start-up
-        self.window_msgs = 0
-        self.window_samples = 0
-
-
-class DetectorWiring:
+class DetectorWiring(DiagnosticsMixin):
     """
     The node's ROS wiring around :class:`ContactDetector`, shared by both node classes.
 
@@ -225,16 +216,15 @@ class DetectorWiring:
         self._count_base: Dict[str, int] = {}
         self._throttle = _Throttle()
         self._pending: Optional[NodeConfig] = None
-        self.audio = _Stream()
-        self.wrench = _Stream()
+        self.audio = InputStream()
+        self.wrench = InputStream()
         self.wrench_rate = StampRate()      # the rate the wrench really arrives at
         self._rate_warned = False
-        self.audio_format = AudioFormat(sample_rate=cfg.audio_sample_rate,
-                                        channels=cfg.audio_channels)
-        # ros-drivers types: the format is confirmed by audio_info (None = not yet).
-        self.audio_info_ok: Optional[bool] = (None if self.audio_spec.info_topic
-                                              and cfg.audio_wait_for_info else True)
-        self.audio_refused: Optional[str] = None
+        self.negotiation = AudioFormatNegotiation(
+            configured=AudioFormat(sample_rate=cfg.audio_sample_rate,
+                                   channels=cfg.audio_channels),
+            info_topic=self.audio_spec.info_topic, wait_for_info=cfg.audio_wait_for_info,
+            channel=cfg.audio_channel)
         self.detector = self._build_detector(rate=cfg.audio_sample_rate,
                                              armed=cfg.release_armed_on_start)
         self._time_jumps_seen = 0
@@ -348,12 +338,17 @@ class DetectorWiring:
     def _audio_text(self) -> str:
         if not self.use_audio:
             return 'off (F/T-only model: no audio subscription, one frame per F/T frame)'
-        return f'{self.config.audio_msg_type} {self._format_text()}'
+        return f'{self.config.audio_msg_type} {self.negotiation.describe()}'
 
-    def _format_text(self) -> str:
-        fmt, channel = self.audio_format, self.config.audio_channel
-        which = 'mixed' if channel is None else f'channel {channel}'
-        return f'{fmt.sample_rate:g} Hz x {fmt.channels} ch ({which})'
+    @property
+    def audio_format(self) -> AudioFormat:
+        """Return the format audio chunks are decoded with (see :mod:`.audio_format`)."""
+        return self.negotiation.format
+
+    @property
+    def audio_refused(self) -> Optional[str]:
+        """Return why every audio chunk is dropped (unsupported format), else None."""
+        return self.negotiation.refused
 
     # --- helpers ---------------------------------------------------------------------------------
 
@@ -379,7 +374,7 @@ class DetectorWiring:
         try:
             self.detector = self._build_detector(rate=rate, armed=old.armed)
         except ConfigError as err:
-            self.audio_refused = str(err)
+            self.negotiation.refuse(str(err))
             self.get_logger().error(f'audio refused: {err}')
             return
         for name, value in old.counts.items():
@@ -428,27 +423,21 @@ class DetectorWiring:
         stream.last_rx = now
         stream.received += 1
         stream.window_msgs += 1
-        if self.audio_refused is not None:
-            self.counts['audio_refused'] += 1
-            self._warn('audio-refused', f'audio dropped: {self.audio_refused}')
-            return
-        if not self.audio_info_ok:
-            self.counts['audio_waiting_info'] += 1
-            self._warn('audio-info', 'audio dropped: waiting for audio_info (transient local) '
-                       'to confirm raw S16LE audio; set audio.wait_for_info:=false to trust '
-                       'the audio.* parameters')
+        negotiation = self.negotiation
+        drop = negotiation.gate()
+        if drop is not None:
+            self.counts[drop.counter] += 1
+            self._warn(drop.key, drop.message)
             return
         try:
-            if self.audio_spec.embedded_info:
-                fmt = embedded_audio_format(msg, cfg.audio_msg_type)
-                if fmt != self.audio_format:
-                    self.audio_format = fmt
-                    self._set_audio_rate(fmt.sample_rate)
-                    if self.audio_refused is not None:
-                        return
-            max_samples = int(cfg.audio_max_chunk_s * self.audio_format.sample_rate)
-            samples = audio_to_samples(msg, msg_type=cfg.audio_msg_type,
-                                       channels=self.audio_format.channels,
+            if self.audio_spec.embedded_info \
+                    and negotiation.on_embedded(msg, cfg.audio_msg_type):
+                self._set_audio_rate(negotiation.format.sample_rate)
+                if negotiation.refused is not None:
+                    return
+            fmt = negotiation.format
+            max_samples = int(cfg.audio_max_chunk_s * fmt.sample_rate)
+            samples = audio_to_samples(msg, msg_type=cfg.audio_msg_type, channels=fmt.channels,
                                        channel=cfg.audio_channel, max_samples=max_samples)
             stamp = now
             if cfg.audio_stamp_source == 'header':
@@ -508,22 +497,13 @@ class DetectorWiring:
 
     def _on_audio_info(self, msg: Any) -> None:
         try:
-            try:
-                fmt = check_audio_info(msg)
-            except ConfigError as err:
-                if self.audio_refused != str(err):
-                    self.get_logger().error(f'audio refused: {err}')
-                self.audio_refused = str(err)
-                self.audio_info_ok = False
-                return
-            if self.audio_refused is not None or not self.audio_info_ok \
-                    or fmt != self.audio_format:
-                self.get_logger().info(f'audio_info: {fmt.sample_rate:g} Hz, {fmt.channels} '
-                                       'channel(s), raw S16LE')
-            self.audio_refused = None
-            self.audio_info_ok = True
-            self.audio_format = fmt
-            self._set_audio_rate(fmt.sample_rate)
+            outcome = self.negotiation.on_info(msg)
+            if outcome.error is not None:
+                self.get_logger().error(outcome.error)
+            if outcome.info is not None:
+                self.get_logger().info(outcome.info)
+            if outcome.accepted is not None:
+                self._set_audio_rate(outcome.accepted.sample_rate)
         except Exception as err:  # a callback must never raise
             self._callback_failed('audio_info', err)
 
@@ -651,119 +631,6 @@ class DetectorWiring:
         changed = ', '.join(f'{p.name}={p.value!r}' for p in params if p.name in PARAMS_BY_NAME)
         self.get_logger().info(f'parameters updated: {changed}')
 
-    # --- diagnostics -----------------------------------------------------------------------------
-
-    def _publish_diagnostics(self) -> None:
-        try:
-            self.diagnostics_pub.publish(self.diagnostics())
-        except Exception as err:  # a callback must never raise
-            self._callback_failed('diagnostics', err)
-
-    def diagnostics(self) -> DiagnosticArray:
-        """Build the diagnostics message and start a new measurement window."""
-        now = self._now()
-        mono = time.monotonic()
-        span = max(mono - self._window_start, 1e-9)
-        cfg, det = self.config, self.detector
-        counts = self.detector_counts()
-        values: Dict[str, str] = {}
-
-        def age(stream: _Stream) -> Optional[float]:
-            return None if stream.last_rx is None else now - stream.last_rx
-
-        def fmt_s(value: Optional[float]) -> str:
-            return 'never' if value is None else f'{value:.3f}'
-
-        def pct(samples: list, q: float) -> str:
-            return f'{1e3 * float(np.percentile(samples, q)):.3f}' if samples else 'n/a'
-
-        audio_age, wrench_age = age(self.audio), age(self.wrench)
-        rule = det.rule
-        values.update({
-            'model_id': self.bundle.model_id,
-            'model_path': self.model_path,
-            'model_active': (det.active_name if isinstance(det, AudioFallback)
-                             else 'audio + F/T' if self.use_audio else 'F/T-only'),
-            'fallback_model_id': self.ft_bundle.model_id if self.ft_bundle else 'none',
-            'decision_rule': rule.describe(),
-            'armed': str(det.armed),
-            'audio_msg_type': cfg.audio_msg_type,
-            'audio': 'on' if self.use_audio else 'off (F/T-only model)',
-            'audio_format': self._format_text() if self.use_audio else 'n/a',
-            'audio_info': ('refused: ' + self.audio_refused if self.audio_refused
-                           else 'n/a' if not self.audio_spec.info_topic or not self.use_audio
-                           else 'ok' if self.audio_info_ok else 'waiting'),
-            'audio_msg_rate_hz': f'{self.audio.window_msgs / span:.1f}',
-            'audio_sample_rate_hz': f'{self.audio.window_samples / span:.0f}',
-            'wrench_msg_rate_hz': f'{self.wrench.window_msgs / span:.1f}',
-            'wrench_sample_rate_hz': f'{self.wrench.window_samples / span:.1f}',
-            'audio_age_s': fmt_s(audio_age),
-            'wrench_age_s': fmt_s(wrench_age),
-            'wrench_stamp_lag_s': fmt_s(None if self.wrench.last_stamp is None
-                                        else now - self.wrench.last_stamp),
-            'latency_p50_ms': pct(self._window_latency, 50),
-            'latency_p99_ms': pct(self._window_latency, 99),
-            'latency_max_ms': pct(self._window_latency, 100),
-            'frame_age_p50_ms': pct(self._window_age, 50),
-            'frame_age_p99_ms': pct(self._window_age, 99),
-            'last_error': det.last_error or '',
-        })
-        values.update({name: str(value) for name, value in sorted(counts.items())})
-        values['audio_received'] = str(self.audio.received)
-        values['wrench_received'] = str(self.wrench.received)
-        inputs = (('audio', audio_age), ('wrench', wrench_age)) if self.use_audio else (
-            ('wrench', wrench_age),)
-        stale = [name for name, value in inputs
-                 if value is None or value > cfg.max_input_delay_s]
-        # Until the first input arrives the node is waiting, not faulty: no warning.
-        waiting = all(value is None for _, value in inputs)
-        for name, stream in (('audio', self.audio), ('wrench', self.wrench)):
-            if stream.received and name not in self._started:
-                self._started.add(name)
-                self.get_logger().info(f'{name} input started')
-        troubles = {name: counts.get(name, 0) - self._window_counts.get(name, 0)
-                    for name in WARN_COUNTERS}
-        troubles = {name: value for name, value in troubles.items() if value > 0}
-        self._window_counts = counts
-        measured = self.wrench_rate.rate()
-        values['wrench_measured_rate_hz'] = 'n/a' if measured is None else f'{measured:.1f}'
-        mismatch = rate_mismatch(measured=measured, configured=cfg.wrench_rate)
-        if mismatch and not self._rate_warned:
-            self.get_logger().warning(mismatch)      # once; /diagnostics says it every period
-        self._rate_warned = mismatch is not None
-        if self.audio_refused:
-            level, message = DiagnosticStatus.ERROR, f'audio refused: {self.audio_refused}'
-        elif waiting:
-            level, message = DiagnosticStatus.WARN, (
-                'waiting for input: ' + ', '.join(name for name, _ in inputs))
-        elif mismatch:
-            level, message = DiagnosticStatus.WARN, mismatch
-        elif stale:
-            level, message = DiagnosticStatus.WARN, f'stale or missing input: {", ".join(stale)}'
-        elif troubles:
-            level, message = DiagnosticStatus.WARN, 'bad input: ' + ', '.join(
-                f'{name} +{value}' for name, value in troubles.items())
-        else:
-            level, message = DiagnosticStatus.OK, (
-                f'running, release {"armed" if det.armed else "disarmed"}')
-        if isinstance(det, AudioFallback) and det.active is det.fallback:
-            message += '; F/T-only model active (no audio for audio.timeout_s)'
-            level = max(level, DiagnosticStatus.WARN)
-        if level != DiagnosticStatus.OK and not waiting and message != mismatch:
-            # Faults without a log line of their own (dropouts, stale input, clipping) show
-            # up here, throttled like the others.
-            self._warn(f'diagnostics-{message.split(":")[0]}', f'diagnostics: {message}')
-        self.audio.window_msgs = self.audio.window_samples = 0
-        self.wrench.window_msgs = self.wrench.window_samples = 0
-        self._window_latency, self._window_age = [], []
-        self._window_start = mono
-        status = DiagnosticStatus(level=level, name=f'{self.get_name()}: contact detector',
-                                  message=message, hardware_id=self.get_fully_qualified_name(),
-                                  values=[KeyValue(key=k, value=v) for k, v in values.items()])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        return array
-
 
 class ContactDetectorNode(DetectorWiring, Node):
     """
@@ -806,6 +673,11 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     Return the executor ``executor.type`` asks for, with ``node`` added.
 
+    ``single_threaded`` (the default) is rclpy's :class:`SingleThreadedExecutor`: public rclpy
+    API only. ``hot_path`` (opt-in) is :class:`~contact_detector.ros.executor.HotPathExecutor`:
+    less CPU per message, private rclpy API (a warning is logged on an rclpy version it was not
+    checked with).
+
     With ``executor.lazy_wrench``, ``hot_path`` wakes up for audio chunks and for wrench
     messages only while an audio frame waits for F/T data: the wrench messages that arrived
     meanwhile are taken first at the next wake-up (fewer wake-ups, each costing a cold start;
@@ -815,15 +687,25 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     """
     cfg = node.config
     if cfg.executor_type == 'hot_path':
+        # Private rclpy API: imported only when asked for (see its module docstring).
+        from contact_detector.ros.executor import (CHECKED_RCLPY_VERSIONS, HotPathExecutor,
+                                                   rclpy_version)
+        version = rclpy_version()
+        if version not in CHECKED_RCLPY_VERSIONS:
+            node.get_logger().warning(
+                f'executor.type hot_path uses private rclpy API checked with rclpy '
+                f'{", ".join(CHECKED_RCLPY_VERSIONS)}; this is rclpy {version or "(unknown)"}: '
+                'run test/test_hot_path_executor.py, or use executor.type single_threaded')
         # Without audio the wrench stream clocks the frames: never lazy.
         lazy = ([node.wrench_sub] if cfg.executor_lazy_wrench and node.use_audio
                 and cfg.wrench_stamp_source == 'header' else [])
         executor = HotPathExecutor(hot=list(node.subscriptions), poll_s=cfg.executor_poll_s,
                                    lazy=lazy, wanted=node.wrench_wanted,
                                    lazy_max_s=min(cfg.executor_poll_s,
-                                                  0.5 * cfg.qos_depth / cfg.wrench_rate))
+                                                  0.5 * cfg.qos_depth / cfg.wrench_rate),
+                                   context=node.context)
     else:
-        executor = SingleThreadedExecutor()
+        executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     return executor
 

@@ -179,9 +179,11 @@ PARAMS: Sequence[ParamSpec] = (
               -100.0, 100.0, read_only=False),
     ParamSpec('gripper.duration_s', 0.5, 'time_from_start of the trajectory point, s.',
               0.0, 60.0, read_only=False),
-    ParamSpec('executor.type', 'hot_path', "Executor run by main(): 'hot_path' serves the "
-              'input subscriptions from a small wait set (less CPU per message), '
-              "'single_threaded' is rclpy's stock SingleThreadedExecutor.",
+    ParamSpec('executor.type', 'single_threaded', 'Executor run by main(): '
+              "'single_threaded' is rclpy's SingleThreadedExecutor (public rclpy API only); "
+              "'hot_path' (opt-in) serves the input subscriptions from a small wait set, "
+              'less CPU per message, built on private rclpy API checked with the rclpy '
+              'versions in contact_detector.ros.executor.CHECKED_RCLPY_VERSIONS.',
               choices=EXECUTORS),
     ParamSpec('executor.poll_s', 0.05, 'hot_path: longest delay of service, parameter and '
               'timer callbacks, s.', 0.001, 1.0),

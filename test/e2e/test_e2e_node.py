@@ -18,7 +18,7 @@ Three processes over DDS (loopback): trial publisher at the real rate, the node,
 The publisher plays a simulated trial with in-air hand hits before the contact, its times
 shifted to the wall clock; the node runs as ``python -m contact_detector.ros.node`` with its
 default parameters from params/contact_detector.yaml (best-effort sensor-data QoS,
-audio stamped on receipt, the hot-path executor); the listener
+audio stamped on receipt, rclpy's SingleThreadedExecutor); the listener
 records ``contact`` and ``release``. The release must come after the true onset, within the
 latency budget, and be the only one.
 """
