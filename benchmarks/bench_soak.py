@@ -57,7 +57,8 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / 'test'))
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings  # noqa: E402
-from contact_detector.model.bundle import load_bundle, ModelBundle  # noqa: E402
+from contact_detector.model.bundle import ModelBundle  # noqa: E402
+from contact_detector.model.storage import load_bundle  # noqa: E402
 from contact_detector.sim.conditions import ALIASES  # noqa: E402
 from contact_detector.sim.trial import simulate_trial  # noqa: E402
 import numpy as np  # noqa: E402

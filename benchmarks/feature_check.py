@@ -49,14 +49,13 @@ import argparse
 from dataclasses import replace
 from typing import Dict, List
 
-from contact_detector.cli.sweep import decode
-from contact_detector.cli.train import DEFAULT_FEATURES, DEFAULT_LABELS
 from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.bundle import DecisionRule
-from contact_detector.model.sweep import (compute_frames, FeatureSetting, fit_forest,
-                                          score_rules)
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_LABELS
+from contact_detector.training.sweep import compute_frames, FeatureSetting, fit_forest, score_rules
+from contact_detector.training.sweep import decode_bags
 import numpy as np
 
 BEFORE = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
@@ -154,7 +153,8 @@ def _frames(folders: List[str], config: FeatureConfig, jobs: int) -> list:
     frames = {}
     for k, folder in enumerate(folders):
         frames.update(compute_frames(
-            events_by_trial=decode(find_bags([folder]), spec, f'set{k}'), config=config,
+            events_by_trial=decode_bags(bags=find_bags([folder]), spec=spec, tag=f'set{k}'),
+            config=config,
             audio_rate=16000.0, wrench_rate=100.0, jobs=jobs))
     return list(frames.values())
 

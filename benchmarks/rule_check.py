@@ -26,13 +26,15 @@ simulated set. It is how the default rule in docs/sweep.md was validated.
 import argparse
 from pathlib import Path
 
-from contact_detector.cli.sweep import decode, rule_grid
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.bundle import DecisionRule, default_model_path, load_bundle
-from contact_detector.model.sweep import (compute_frames, FeatureSetting, rows_markdown,
-                                          score_rules)
-from contact_detector.model.training import LabelWindow
+from contact_detector.model.rule import DecisionRule
+from contact_detector.model.shipped import default_model_path
+from contact_detector.model.storage import load_bundle
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.sweep import (compute_frames, FeatureSetting, rows_markdown,
+                                             score_rules)
+from contact_detector.training.sweep import decode_bags, rule_grid
 
 
 def main() -> None:
@@ -46,8 +48,9 @@ def main() -> None:
     bundle = load_bundle(path=args.model or default_model_path())
     test_names = set(bundle.training.get('test_trials', []))
     spec = StreamSpec()
-    own = decode([p for p in find_bags([args.train]) if p.name in test_names], spec, 'train')
-    heldout = decode(find_bags([args.heldout]), spec, 'heldout')
+    own = decode_bags(bags=[p for p in find_bags([args.train]) if p.name in test_names],
+                      spec=spec, tag='train')
+    heldout = decode_bags(bags=find_bags([args.heldout]), spec=spec, tag='heldout')
     setting = FeatureSetting('shipped', bundle.feature_config,
                              LabelWindow(**bundle.label_window))
     rules = rule_grid() + [DecisionRule(threshold=t, confirm_frames=k)

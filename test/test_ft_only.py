@@ -29,7 +29,8 @@ from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureCon
                                               PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.streaming import ForceTorqueStream, StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, WrenchEvent
-from contact_detector.model.bundle import DecisionRule, ModelBundle, runtime_versions
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier

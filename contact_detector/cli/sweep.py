@@ -37,16 +37,15 @@ from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
-from contact_detector.cli.evaluate import truth_for
-from contact_detector.cli.train import conditions_of, DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
-from contact_detector.io.sensor_stream import load_events, StreamSpec
-from contact_detector.model.bundle import DecisionRule
-from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetting,
-                                          fit_forest, leave_one_family_out, rows_markdown,
-                                          score_rules, worst_family)
-from contact_detector.model.training import LabelWindow
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
+from contact_detector.training.sweep import (best_row, compute_frames, decode_bags, FeatureSetting,
+                                             fit_forest, leave_one_family_out, rows_markdown,
+                                             rule_grid, score_rules, worst_family)
 from tqdm import tqdm
 
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
@@ -88,12 +87,6 @@ def feature_grid(name: str) -> List[FeatureSetting]:
                        replace(ours, audio_frame_s=0.016, audio_hop_s=0.005), STATE),
     ]
     return {'compare': compare, 'focus': focus, 'full': compare + focus, 'none': []}[name]
-
-
-def rule_grid() -> List[DecisionRule]:
-    """Thresholds x confirmation frames."""
-    return [DecisionRule(threshold=th, confirm_frames=k, refractory_s=1.0)
-            for th in (0.3, 0.5, 0.7, 0.9) for k in (1, 2, 3, 5)]
 
 
 def ablation_settings() -> List[FeatureSetting]:
@@ -140,13 +133,9 @@ def thresholds(text: str) -> List[float]:
 
 
 def decode(bags, spec, tag):
-    """Decode every bag once: 'tag/name' -> (events, truth)."""
-    manifest = conditions_of(bags)
-    out = {}
-    for bag in tqdm(bags, desc=f'decode {tag}', unit='bag'):
-        events = load_events(bag, spec=spec)
-        out[f'{tag}/{bag.name}'] = (events, truth_for(bag, events, manifest))
-    return out
+    """Decode every bag once, with a progress bar: 'tag/name' -> (events, truth)."""
+    return decode_bags(bags=bags, spec=spec, tag=tag,
+                       progress=lambda b: tqdm(b, desc=f'decode {tag}', unit='bag'))
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

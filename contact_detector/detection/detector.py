@@ -30,7 +30,8 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.streaming import (FeatureFrames, StreamingFeatureExtractor,
                                                  TimeJumpError, to_unit_audio)
-from contact_detector.model.bundle import DecisionRule, ModelBundle
+from contact_detector.model.bundle import ModelBundle
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 
 #: A dropped message's stamp is trusted at most this far ahead of the newest accepted input, s

@@ -23,16 +23,19 @@ re-measures the chosen defaults through the full detector.
 """
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from pathlib import Path
+from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.detection.offline import run_features
 from contact_detector.detection.release import ReleaseLogic
-from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize, Truth)
+from contact_detector.evaluation.metrics import frame_labels, score_trial, summarize, Truth
+from contact_detector.evaluation.truth import conditions_of, truth_for
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
-from contact_detector.model.bundle import DecisionRule
+from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.compiled_forest import CompiledForest
-from contact_detector.model.training import LabelWindow
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.protocol import LabelWindow
 from joblib import delayed, Parallel
 import numpy as np
 from sklearn.ensemble import RandomForestClassifier
@@ -68,6 +71,32 @@ class SweepRow:
     precision: float
     recall: float
     extra: dict = field(default_factory=dict)
+
+
+def decode_bags(*, bags: Sequence[Path], spec: StreamSpec, tag: str,
+                progress: Callable[[Iterable], Iterable] = iter) -> Dict[str, tuple]:
+    """
+    Decode every bag once, for the sweeps that reuse the messages.
+
+    Returns
+    -------
+    dict
+        ``'<tag>/<bag name>'`` -> ``(events, Truth)``, the truth from the manifest beside the
+        bags or the truth topic (:func:`~contact_detector.evaluation.truth.truth_for`).
+
+    """
+    manifest = conditions_of(bags)
+    out = {}
+    for bag in progress(bags):
+        events = load_events(bag, spec=spec)
+        out[f'{tag}/{bag.name}'] = (events, truth_for(bag, events, manifest))
+    return out
+
+
+def rule_grid() -> List[DecisionRule]:
+    """Thresholds x confirmation frames."""
+    return [DecisionRule(threshold=th, confirm_frames=k, refractory_s=1.0)
+            for th in (0.3, 0.5, 0.7, 0.9) for k in (1, 2, 3, 5)]
 
 
 def trial_frames(*, events, truth: Truth, config: FeatureConfig, audio_rate: float,
