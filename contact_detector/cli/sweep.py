@@ -17,6 +17,7 @@
 
     contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
     contact-detector sweep DIR... --lofo [--lofo-settings shipped,invariant] [--out FILE.md]
+    contact-detector sweep DIR... --model M [--own-test TRAIN_DIR] [--out FILE.md]
 
 With ``--lofo`` every trial of every folder is pooled and grouped by family (its condition set
 in the manifest); for each family a forest is trained on all the others and every candidate
@@ -28,6 +29,14 @@ on the training trials, then scores every decision rule on the held-out trials: 
 misses, premature releases, latency, contact events blamed on exogenous impacts, frame
 precision/recall. With ``--ablation`` it also trains on all condition sets but one and tests on
 the one left out (heavy, soft, noisy, gain), for the settings that are meant to generalise.
+``--seeds 0,1,2,3`` trains one forest per seed for the grid and the ablation and sums the
+counts over the seeds (latency: the median of the per-seed medians): a 10-tree forest is a
+noisy estimator, and one forest cannot tell two close settings apart.
+
+With ``--model`` no forest is trained: the rules (the model's own, the threshold x
+confirmation grid, single-frame paths with a slow path) are scored with that model's features,
+labels and trees on every trial of the folders, and with ``--own-test`` also on the model's own
+trial-split test trials found in TRAIN_DIR: the check of a rule on the model that ships.
 """
 
 import argparse
@@ -37,15 +46,20 @@ from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
+from contact_detector.errors import ContactDetectorError
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule
+from contact_detector.model.storage import load_bundle
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.training.sweep import (best_row, compute_frames, decode_bags, FeatureSetting,
-                                             fit_forest, leave_one_family_out, rows_markdown,
-                                             rule_grid, score_rules, worst_family)
+                                             fit_forest, leave_one_family_out, model_rules,
+                                             rows_markdown, rule_grid, score_model,
+                                             score_over_seeds, score_rules, seed_rows_markdown,
+                                             worst_family)
+import numpy as np
 from tqdm import tqdm
 
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
@@ -60,7 +74,7 @@ STATE = LabelWindow(0.0, 0.3)
 
 def feature_grid(name: str) -> List[FeatureSetting]:
     """Return the feature settings to try: 'compare', 'focus' or 'full' (both)."""
-    paper = FeatureConfig(ft_window=160, ft_hop=128)
+    paper = FeatureConfig.paper()
     base = FeatureConfig(ft_window=32, ft_hop=1)
     ours = FeatureConfig(ft_detrend='mean', extra_features=EXTRAS)
     compare = [
@@ -132,6 +146,17 @@ def thresholds(text: str) -> List[float]:
     return values
 
 
+def seed_list(text: str) -> List[int]:
+    """Parse ``0,1,2,3`` into forest seeds (argparse type)."""
+    try:
+        seeds = [int(v) for v in text.split(',') if v.strip()]
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'not a list of seeds: {text!r}') from err
+    if not seeds:
+        raise argparse.ArgumentTypeError(f'no seed in {text!r}')
+    return seeds
+
+
 def decode(bags, spec, tag):
     """Decode every bag once, with a progress bar: 'tag/name' -> (events, truth)."""
     return decode_bags(bags=bags, spec=spec, tag=tag,
@@ -161,12 +186,31 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              f'(default {DEFAULT_RULE.sustain_threshold})')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seeds', type=seed_list, default=None, metavar='LIST',
+                        help='forest seeds, comma-separated: grid and ablation summed over '
+                             'one forest per seed (default: --seed alone)')
+    parser.add_argument('--model', type=Path, default=None,
+                        help='score the rules with this trained model instead of training')
+    parser.add_argument('--own-test', type=Path, default=None, metavar='TRAIN_DIR',
+                        help="--model: also score the model's own test trials in TRAIN_DIR")
     parser.add_argument('--audio-rate', type=float, default=16000.0)
     parser.add_argument('--wrench-rate', type=float, default=100.0)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
     spec = StreamSpec()
+    if args.own_test is not None and args.model is None:
+        parser.error('--own-test needs --model')
+    if args.model is not None:
+        try:
+            output = with_model(args, spec)
+        except ContactDetectorError as err:
+            print(f'contact-detector sweep: {err}', file=sys.stderr)
+            return 1
+        print(output)
+        if args.out:
+            args.out.write_text(output)
+        return 0
     if args.lofo:
         output = lofo(args, spec)
         print(output)
@@ -178,7 +222,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     train = decode(find_bags([args.bags[0]]), spec, 'train')
     heldout = decode(find_bags([args.bags[1]]), spec, 'heldout')
     rules = rule_grid()
-    rows, best_rows = [], []
+    rows, best_rows, totals = [], [], []
     cache = {}
     for setting in tqdm(feature_grid(args.grid), desc='settings', unit='setting'):
         key = setting.config
@@ -190,6 +234,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                           audio_rate=args.audio_rate,
                                           wrench_rate=args.wrench_rate, jobs=args.jobs))}
         train_frames, heldout_frames = cache[key]
+        if args.seeds:
+            totals += score_over_seeds(train=list(train_frames.values()),
+                                       heldout=list(heldout_frames.values()), setting=setting,
+                                       rules=rules, seeds=args.seeds, n_estimators=10,
+                                       jobs=args.jobs)
+            continue
         forest = fit_forest(frames=list(train_frames.values()), setting=setting,
                             n_estimators=10, seed=args.seed, jobs=args.jobs)
         scored = score_rules(forest=forest, frames=list(heldout_frames.values()),
@@ -197,6 +247,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         rows += scored
         best_rows.append(best_row(scored))
     text = []
+    if totals:
+        text += ['## Every rule, summed over the forest seeds (held-out trials)', '',
+                 seed_rows_markdown(totals, seeds=args.seeds), '']
     if rows:
         text += ['## Best rule per setting (held-out trials)', '', rows_markdown(best_rows), '',
                  '## Every rule', '', rows_markdown(rows), '']
@@ -292,9 +345,12 @@ def ablation(train, heldout, args) -> str:
     """Leave-one-condition-out table for the ablation settings (the default rule)."""
     everything = {**train, **heldout}
     rules = [replace(DEFAULT_RULE, sustain_threshold=th) for th in args.ablation_sustain]
+    seeds = args.seeds or [args.seed]
     lines = [f'Rule: {DEFAULT_RULE.short()} (slow-path thresholds '
              f"{', '.join(str(th) for th in args.ablation_sustain)}); forest of 10 trees "
-             'trained on every trial of the other condition sets.', '',
+             'trained on every trial of the other condition sets'
+             + (f', counts summed over seeds {seeds}, latency the median of the per-seed '
+                'medians.' if len(seeds) > 1 else '.'), '',
              '| setting | held-out condition | slow path | detected | premature | '
              'impact events | latency median [ms] |', '|---|---|---|---|---|---|---|']
     cache = {}
@@ -309,18 +365,37 @@ def ablation(train, heldout, args) -> str:
             test = [f for f in frames.values() if f.truth.condition == condition]
             if not test:
                 continue
-            forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=args.seed,
-                                jobs=args.jobs)
-            scored = score_rules(forest=forest, frames=test, setting=setting, rules=rules)
-            for rule, row in zip(rules, scored):
-                s = row.summary
-                median = ('-' if s['latency_ms_median'] is None
-                          else f"{s['latency_ms_median']:.0f}")
+            totals = score_over_seeds(train=fit, heldout=test, setting=setting, rules=rules,
+                                      seeds=seeds, n_estimators=10, jobs=args.jobs)
+            for rule, t in zip(rules, totals):
+                median = '-' if not t['medians'] else f"{np.median(t['medians']):.0f}"
                 slow = f'mean{rule.sustain_frames}>={rule.sustain_threshold}'
                 lines.append(f'| {setting.name} | {condition} | {slow} | '
-                             f"{s['detected']}/{s['trials']} | {s['premature']} | "
-                             f"{s['impact_events']} | {median} |")
+                             f"{t['detected']}/{t['trials']} | {t['premature']} | "
+                             f"{t['impact']} | {median} |")
     return '\n'.join(lines)
+
+
+def with_model(args, spec) -> str:
+    """Score :func:`model_rules` with a trained model on its own test trials and the folders."""
+    bundle = load_bundle(path=args.model)
+    rules = model_rules(bundle.decision_rule)
+    groups = []
+    if args.own_test is not None:
+        test = set(bundle.training.get('test_trials', []))
+        own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
+        groups.append((f'own {len(own)} test trials', decode(own, spec, 'own')))
+    for i, folder in enumerate(args.bags):
+        trials = decode(find_bags([folder]), spec, f'{i}')
+        groups.append((f'{Path(folder).name}: {len(trials)} trials', trials))
+    text = [f'## Rules scored with {args.model.name} ({bundle.model_id})', '']
+    for name, trials in groups:
+        if trials:
+            text += [rows_markdown(score_model(bundle=bundle, events_by_trial=trials, name=name,
+                                               rules=rules, audio_rate=args.audio_rate,
+                                               wrench_rate=args.wrench_rate, jobs=args.jobs)),
+                     '']
+    return '\n'.join(text)
 
 
 if __name__ == '__main__':
