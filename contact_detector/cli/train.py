@@ -41,20 +41,14 @@ from typing import Optional, Sequence
 from contact_detector.cli.common import (add_feature_arguments, add_stream_arguments,
                                          config_from_args, discover_all, rule_from_args,
                                          tree_counts)
-from contact_detector.detection.factory import stream_spec
-from contact_detector.errors import BagError, ContactDetectorError
+from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import conditions_of
-from contact_detector.features.config import FEATURE_SCHEMA_VERSION
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
-from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import (LabelWindow, read_labels_csv, run_split,
-                                                trial_features, unlabelled_bags)
-from contact_detector.training.recipe import (event_metrics, MIN_RECORDINGS, NO_AUDIO_RATE,
-                                              SIM_CONDITIONS, simulated_trials,
-                                              training_sources)
+from contact_detector.training.protocol import LabelWindow, read_labels_csv, unlabelled_bags
+from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, simulated_trials,
+                                              train_model, training_sources)
 import numpy as np
 from tqdm import tqdm
 
@@ -160,8 +154,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
-    from joblib import delayed, Parallel  # training only: scikit-learn's dependency
-
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end)
     rule = rule_from_args(args)
@@ -199,69 +191,33 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             wrench_topic=None, audio_topic=None, audio_rate=None, wrench_rate=None,
             audio_coding=None), params={}, prog='contact-detector train'))
     bags = list(found)
-    if len(bags) < MIN_RECORDINGS:
-        raise BagError(f'train splits by recording into training, validation and test sets and '
-                       f'needs at least {MIN_RECORDINGS} recordings, got {len(bags)}: add '
-                       'recordings, cut a long one into one bag per contact '
-                       '(tools/split_recording.py) or add simulated trials (--with-sim N)')
     manifest = conditions_of(bags)
-    user = set(user_bags)
+    sources = training_sources(user=user_bags, csv_onsets=csv_onsets, labels_path=args.labels,
+                               sim=sim_bags, sim_settings=sim_settings, sim_dir=sim_dir,
+                               kept=args.sim_dir is not None, manifest=manifest)
+    bars = {}
 
-    def one(bag):
-        streams = found[bag]
-        return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
-                              audio_rate=streams.audio_rate or NO_AUDIO_RATE,
-                              wrench_rate=streams.wrench_rate, label_window=labels,
-                              onsets=csv_onsets[bag.name] if csv_onsets and bag in user
-                              else None,
-                              condition=manifest.get(bag, {}).get('condition', ''))
+    def step(_message: str) -> None:
+        if 'forests' not in bars:
+            bars['forests'] = tqdm(total=2 * (len(args.trees) + 1), desc='forests', unit='step')
+        bars['forests'].update(1)
 
-    trials = Parallel(n_jobs=args.jobs)(
-        delayed(one)(bag) for bag in tqdm(bags, desc='features', unit='bag'))
-    x = np.concatenate([t.x for t in trials])
-    y = np.concatenate([t.y for t in trials])
-    groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
-    # Names tell the trials apart in the split: a recording and a trial may share one.
-    names = [t.name if b in user else f'sim/{t.name}' for b, t in zip(bags, trials)]
-    print(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
-    results = {}
-    with tqdm(total=2 * (len(args.trees) + 1), desc='forests', unit='step') as bar:
-        for kind in ('sample', 'trial'):
-            results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
-                                      seed=args.seed, jobs=args.jobs, n_range=args.trees,
-                                      progress=lambda _msg: bar.update(1))
-    quoted = results['trial']
-    metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
-                      'cv_accuracy_mean': r.cv_mean, 'cv_accuracy_sd': r.cv_sd,
-                      'test_auc': r.test_auc, 'test_report': r.report,
-                      'confusion_matrix': r.confusion}
-               for kind, r in results.items()}
-    training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
-                'conditions': sorted({t.condition for t in trials}),
-                'test_trials': quoted.test_trials, 'seed': args.seed,
-                'audio_rate': sorted({s.audio_rate for s in found.values()}),
-                'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),
-                'sources': training_sources(user=user_bags, csv_onsets=csv_onsets,
-                                            labels_path=args.labels, sim=sim_bags,
-                                            sim_settings=sim_settings, sim_dir=sim_dir,
-                                            kept=args.sim_dir is not None,
-                                            manifest=manifest)}
-    bundle = ModelBundle(
-        forest=quoted.forest, feature_config=config, feature_names=config.feature_names,
-        feature_schema_version=FEATURE_SCHEMA_VERSION, label_window=labels.to_dict(),
-        decision_rule=rule,
-        versions=runtime_versions(),
-        training=training, metrics=metrics,
-        created=datetime.now(timezone.utc).isoformat(timespec='seconds'))
-    if not args.no_events:
-        test_bags = [b for b, n in zip(bags, names) if n in set(quoted.test_trials)]
-        metrics['events_test_trials'] = event_metrics(
-            bundle=bundle, bags=tqdm(test_bags, desc='events', unit='bag'), spec=StreamSpec(),
-            audio_rate=16000.0, wrench_rate=100.0, manifest=manifest, found=found,
-            labels={b.name: csv_onsets[b.name] for b in test_bags if b in user}
-            if csv_onsets else None)
+    try:
+        trained = train_model(
+            found=found, user_bags=user_bags, csv_onsets=csv_onsets, manifest=manifest,
+            sources=sources, config=config, labels=labels, rule=rule, trees=args.trees,
+            seed=args.seed, jobs=args.jobs, events=not args.no_events,
+            created=datetime.now(timezone.utc).isoformat(timespec='seconds'),
+            progress=lambda items, desc: tqdm(items, desc=desc, unit='bag'), step=step,
+            log=print)
+    finally:
+        if 'forests' in bars:
+            bars['forests'].close()
+    results, bundle = trained.results, trained.bundle
+    quoted, metrics, training = results['trial'], trained.metrics, trained.training
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    path = save_bundle(bundle=bundle, path=args.out, fmt=args.format, check_frames=x)
+    path = save_bundle(bundle=bundle, path=args.out, fmt=args.format,
+                       check_frames=trained.x)
     print(f'model written to {path}')
     print(f'trial split: n_estimators={quoted.best_n}, test AUC {quoted.test_auc:.4f}, '
           f'10-fold CV accuracy {quoted.cv_mean:.5f} (SD {quoted.cv_sd:.5f})')
