@@ -43,7 +43,7 @@ from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trial, simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
-from contact_detector.training import recipe
+from contact_detector.training import recipe, studies
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
@@ -593,7 +593,7 @@ def test_sweep_ablation_scores_each_slow_path_threshold(data, tmp_path, capsys):
     rows = [r for r in rows if not r[0].startswith('---')]
     by_key = {(r[0], r[1], r[2]): r for r in rows}
     settings = {r[0] for r in rows}
-    assert len(settings) == len(sweep_cli.ablation_settings())
+    assert len(settings) == len(studies.ablation_settings())
     assert {r[2] for r in rows} == {'mean15>=0.5', 'mean15>=0.3'}
     for setting, condition, slow in by_key:
         if slow != 'mean15>=0.5':
