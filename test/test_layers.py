@@ -45,8 +45,8 @@ RANK = {name: rank for rank, names in enumerate(LAYERS) for name in names}
 ROS_MODULES = ('rclpy', 'ament_index_python', 'rcl_interfaces', 'std_msgs', 'geometry_msgs',
                'sensor_msgs', 'diagnostic_msgs', 'trajectory_msgs', 'control_msgs',
                'audio_common_msgs', 'lifecycle_msgs', 'launch', 'launch_ros')
-#: Modules of ``cli/`` that are not commands: the dispatcher and the shared options.
-CLI_SUPPORT = ('__init__', 'main', 'common')
+#: Modules of ``cli/`` that are not commands: the dispatcher and the options commands share.
+CLI_SUPPORT = ('__init__', 'main', 'common', 'model_options')
 
 
 def _imports(path: Path) -> list:

@@ -38,9 +38,9 @@ import sys
 import tempfile
 from typing import Optional, Sequence
 
-from contact_detector.cli.common import (add_feature_arguments, add_stream_arguments,
-                                         config_from_args, discover_all, rule_from_args,
-                                         tree_counts)
+from contact_detector.cli.common import add_stream_arguments, discover_all
+from contact_detector.cli.model_options import (add_feature_arguments, config_from_args,
+                                                rule_from_args, tree_counts)
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
