@@ -49,64 +49,9 @@ from contact_detector.model.storage import save_bundle
 from contact_detector.training.protocol import LabelWindow, read_labels_csv, unlabelled_bags
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, simulated_trials,
                                               train_model, training_sources)
+from contact_detector.training.report import write_report
 import numpy as np
 from tqdm import tqdm
-
-
-def write_figures(*, report: Path, split, names: Sequence[str]) -> None:
-    """Confusion matrix, ROC curve and feature importance of a split's test set as PNGs."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    from sklearn.metrics import roc_curve
-
-    fig, ax = plt.subplots(figsize=(4, 3.5))
-    cm = np.array(split.confusion)
-    ax.imshow(cm, cmap='Blues')
-    for (i, j), v in np.ndenumerate(cm):
-        ax.text(j, i, str(v), ha='center', va='center',
-                color='white' if v > cm.max() / 2 else 'black')
-    ax.set_xticks([0, 1], ['not contact', 'contact'])
-    ax.set_yticks([0, 1], ['not contact', 'contact'])
-    ax.set_xlabel('predicted')
-    ax.set_ylabel('true')
-    ax.set_title(f'Confusion matrix ({split.name} split, test)')
-    fig.tight_layout()
-    fig.savefig(report / 'confusion_matrix.png', dpi=120)
-    plt.close(fig)
-
-    fpr, tpr, _ = roc_curve(split.y_test, split.p_test)
-    fig, ax = plt.subplots(figsize=(4, 3.5))
-    ax.plot(fpr, tpr, label=f'AUC = {split.test_auc:.4f}')
-    ax.plot([0, 1], [0, 1], 'k--', lw=0.8)
-    ax.set_xlabel('false positive rate')
-    ax.set_ylabel('true positive rate')
-    ax.set_title(f'ROC ({split.name} split, test)')
-    ax.legend(loc='lower right')
-    fig.tight_layout()
-    fig.savefig(report / 'roc.png', dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(5, 3.5))
-    importance = split.forest.feature_importances_
-    ax.barh(range(len(names)), importance)
-    ax.set_yticks(range(len(names)), names)
-    ax.invert_yaxis()
-    ax.set_xlabel('importance (mean decrease in impurity)')
-    ax.set_title('Feature importance')
-    fig.tight_layout()
-    fig.savefig(report / 'feature_importance.png', dpi=120)
-    plt.close(fig)
-
-
-def n_table_markdown(split) -> str:
-    """Return the paper's Table 1 for one split as markdown."""
-    lines = ['| n_estimators | accuracy | AUC |', '|---|---|---|']
-    for row in split.n_table:
-        mark = '**' if row['n_estimators'] == split.best_n else ''
-        lines.append(f"| {mark}{row['n_estimators']}{mark} | {row['accuracy']:.5f} | "
-                     f"{row['auc']:.5f} |")
-    return '\n'.join(lines)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -229,36 +174,6 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
                      training=training, metrics=metrics, model_path=path)
         print(f'report written to {args.report}/summary.md')
     return 0
-
-
-def write_report(*, report: Path, results: dict, names, training: dict, metrics: dict,
-                 model_path: Path) -> None:
-    """Write summary.md, metrics.json and the figures of the trial split."""
-    report.mkdir(parents=True, exist_ok=True)
-    write_figures(report=report, split=results['trial'], names=names)
-    (report / 'metrics.json').write_text(json.dumps(
-        {'training': training, 'metrics': metrics}, indent=2, default=float))
-    lines = [f'# Training report: {model_path.name}', '',
-             f"{training['trials']} trials ({', '.join(training['conditions']) or 'unlabelled'}"
-             f"), {training['frames']} frames, {training['contact_frames']} labelled contact.",
-             '', 'The paper split frames at random (**sample** split); neighbouring frames of '
-             'one trial then sit in training and test alike. The **trial** split keeps whole '
-             'trials apart and is the one we quote.', '']
-    for kind in ('trial', 'sample'):
-        r = results[kind]
-        lines += [f'## {kind.capitalize()} split', '',
-                  "n_estimators by validation ROC AUC (the paper's Table 1):", '',
-                  n_table_markdown(r), '',
-                  f'Stratified 10-fold cross-validation accuracy: {100 * r.cv_mean:.2f}% '
-                  f'(SD {100 * r.cv_sd:.2f}%).', '',
-                  "Test set classification report (the paper's Table 2):", '', '```',
-                  r.report_text.rstrip(), '```', '']
-    if 'events_test_trials' in metrics:
-        lines += ['## Events on the test trials (full detector, trial split)', '', '```',
-                  json.dumps(metrics['events_test_trials'], indent=2), '```', '']
-    lines += ['![confusion matrix](confusion_matrix.png) ![ROC](roc.png) '
-              '![feature importance](feature_importance.png)', '']
-    (report / 'summary.md').write_text('\n'.join(lines))
 
 
 if __name__ == '__main__':
