@@ -26,8 +26,8 @@ import argparse
 import statistics
 import time
 
-from contact_detector.cli.features import synthetic_recording
 from contact_detector.features import FeatureConfig, StreamingFeatureExtractor
+from contact_detector.sim.synthetic import synthetic_recording
 import numpy as np
 
 

@@ -17,7 +17,7 @@ Offline tools: real-time factor of ``detect``, and the forest against the baseli
 
 (a) **Real-time factor** of ``contact-detector detect`` in one process on one core: simulated
 trials (every condition set) are written as bags, then each bag is decoded and run through a
-fresh detector exactly as ``detect`` does (:func:`contact_detector.cli.detect.detect_bag`):
+fresh detector exactly as ``detect`` does (:func:`contact_detector.detection.factory.detect_bag`):
 in blocks, and once more message by message (the node's path) to check that both give the
 same output and to measure the ratio in the same run.
 Per bag, RTF = bag duration / processing time; the median over bags is reported (wall time and
@@ -40,11 +40,11 @@ Usage::
 
 import argparse
 from datetime import datetime, timezone
-import io
 import os
 from pathlib import Path
 import platform
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -52,13 +52,14 @@ from typing import List, Optional, Sequence
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from contact_detector.cli import detect as detect_cli  # noqa: E402
-from contact_detector.cli import evaluate as evaluate_cli  # noqa: E402
+from contact_detector.detection import factory  # noqa: E402
 from contact_detector.detection.offline import run_detector  # noqa: E402
 from contact_detector.errors import ContactDetectorError  # noqa: E402
+from contact_detector.evaluation import compare, report  # noqa: E402
+from contact_detector.evaluation.baselines import BASELINES  # noqa: E402
 from contact_detector.io.bags import find_bags, open_reader  # noqa: E402
 from contact_detector.io.sensor_stream import load_events, StreamSpec  # noqa: E402
-from contact_detector.model.bundle import default_model_path  # noqa: E402
+from contact_detector.model.shipped import default_model_path  # noqa: E402
 from contact_detector.sim.bag_writer import (manifest_entry, write_manifest,  # noqa: E402
                                              write_trial_bag)
 from contact_detector.sim.trial import simulate_trials  # noqa: E402
@@ -105,15 +106,15 @@ def _clock() -> tuple:
 
 def real_time_factor(*, bags: Sequence[Path], model: Path, audio_rate: float) -> dict:
     """Time detect's per-bag work; return the per-bag figures and their medians."""
-    make, stream = detect_cli.build_detector_factory(model=model, params_file=None,
-                                                     audio_rate=audio_rate)
+    make, stream = factory.build_detector_factory(model=model, params_file=None,
+                                                  audio_rate=audio_rate)
     spec = StreamSpec(**stream)
     make()                                   # warm caches (compiled forest, FFT plans)
     rows = []
     for bag in bags:
         duration = bag_duration(bag)
         w0, c0 = _clock()
-        run = detect_cli.detect_bag(bag=bag, make_detector=make, spec=spec)
+        run = factory.detect_bag(bag=bag, make_detector=make, spec=spec)
         w1, c1 = _clock()
         events = load_events(bag, spec=spec)
         w2, _ = _clock()
@@ -137,15 +138,13 @@ def real_time_factor(*, bags: Sequence[Path], model: Path, audio_rate: float) ->
 
 
 def whole_command(*, folder: Path, model: Path, out: Path) -> float:
-    """Wall time of ``contact-detector detect FOLDER`` in-process (model load, JSONL)."""
+    """Wall time of ``contact-detector detect FOLDER`` (interpreter start, model load, JSONL)."""
     t0 = time.perf_counter()
-    stdout, sys.stdout = sys.stdout, io.StringIO()
-    try:
-        code = detect_cli.main([str(folder), '--model', str(model), '--out', str(out)])
-    finally:
-        sys.stdout = stdout
-    if code != 0:
-        raise SystemExit('detect failed')
+    done = subprocess.run([sys.executable, '-m', 'contact_detector.cli.main', 'detect',
+                           str(folder), '--model', str(model), '--out', str(out)],
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f'detect failed: {done.stderr}')
     return time.perf_counter() - t0
 
 
@@ -232,20 +231,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         folder = work / 'heldout'
         bags = simulate(out=folder, n=args.trials, seed=args.seed, storage=args.storage,
                         audio_rate=args.audio_rate)
-        make, stream = detect_cli.build_detector_factory(model=model, params_file=None,
-                                                         audio_rate=args.audio_rate)
+        make, stream = factory.build_detector_factory(model=model, params_file=None,
+                                                      audio_rate=args.audio_rate)
         probe = make()
         t0 = time.perf_counter()
-        results = evaluate_cli.evaluate(
-            bags=bags, detectors=[d for d in evaluate_cli.DETECTORS if d != 'forest-ft'],
+        results = compare.evaluate(
+            bags=bags, detectors=['forest', *BASELINES],
             make_forest=make,
             spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
             wrench_rate=probe.settings.wrench_rate, label_window=probe.bundle.label_window)
         elapsed = time.perf_counter() - t0
-        evaluate_cli.write_report(report=work / 'report', results=results)
+        report.write_report(report=work / 'report', results=results)
         emit(f'## (b) forest vs baselines ({len(bags)} held-out trials, seed {args.seed}, '
              f'every condition set; {elapsed:.0f} s)', '')
-        emit(evaluate_cli.comparison_table(results), '')
+        emit(report.comparison_table(results), '')
         emit('Detected / trials (premature) by condition:', '')
         emit(by_condition_table(results), '')
         emit(f"Report: `{work / 'report' / 'summary.md'}`"

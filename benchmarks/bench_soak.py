@@ -33,7 +33,7 @@ from pathlib import Path
 import sys
 from typing import List, Optional
 
-from contact_detector.model.bundle import load_bundle
+from contact_detector.model.storage import load_bundle
 from contact_detector.ros.soak import make_pool, run_soak, Sample, summary
 
 SHIPPED_MODEL = Path(__file__).resolve().parents[1] / 'models' / 'contact_forest.npz'

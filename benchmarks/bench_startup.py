@@ -47,7 +47,7 @@ import json, sys, time
 t0 = time.perf_counter()
 import {module}  # noqa: F401
 t1 = time.perf_counter()
-from contact_detector.model.bundle import default_model_path, load_bundle
+from contact_detector.model import default_model_path, load_bundle
 bundle = load_bundle(path={model} or default_model_path())
 t2 = time.perf_counter()
 bundle.compile()

@@ -41,7 +41,8 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial, summarize, Truth
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events
-from contact_detector.model.bundle import default_ft_model_path, load_bundle
+from contact_detector.model.shipped import default_ft_model_path
+from contact_detector.model.storage import load_bundle
 
 
 def rules_of(base) -> dict:

@@ -27,11 +27,18 @@ import argparse
 import csv
 import json
 from pathlib import Path
+import subprocess
 import sys
 import tempfile
 
-from contact_detector.cli import label, simulate
 import numpy as np
+
+
+def command(*args: str) -> None:
+    """Run ``contact-detector ARGS...`` as its own process; exit if it fails."""
+    done = subprocess.run([sys.executable, '-m', 'contact_detector.cli.main', *args])
+    if done.returncode != 0:
+        raise SystemExit(f'contact-detector {args[0]} failed')
 
 
 def main() -> int:
@@ -47,10 +54,10 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         out = args.dir or Path(tmp)
         if not (out / 'manifest.json').exists():
-            simulate.main([str(out), '--trials', str(args.trials), '--seed', str(args.seed),
-                           '--ft-rate', str(args.ft_rate), '--quiet',
-                           '--conditions', *args.conditions])
-        label.main([str(out), '--out', str(out / 'labels.csv')])
+            command('simulate', str(out), '--trials', str(args.trials), '--seed',
+                    str(args.seed), '--ft-rate', str(args.ft_rate), '--quiet',
+                    '--conditions', *args.conditions)
+        command('label', str(out), '--out', str(out / 'labels.csv'))
         trials = json.loads((out / 'manifest.json').read_text())['trials']
         with open(out / 'labels.csv') as handle:
             rows = {r['bag']: r for r in csv.DictReader(handle)}

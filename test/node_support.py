@@ -85,8 +85,9 @@ def train_test_model(path: Path, *, n_trials: int = TRAIN_TRIALS,
     # scikit-learn and the bundle are imported here: the e2e publisher does not need them.
     from sklearn.ensemble import RandomForestClassifier
 
-    from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
-                                               save_bundle)
+    from contact_detector.model.bundle import ModelBundle, runtime_versions
+    from contact_detector.model.rule import DecisionRule
+    from contact_detector.model.storage import save_bundle
     config = FeatureConfig()
     xs, ys = [], []
     for i in range(n_trials):
@@ -120,7 +121,7 @@ def model_path(directory: Path, *, allow_shipped: bool = True) -> Path:
 
 def load_test_model(directory: Path):
     """Load the small test model (never the shipped one), trained once per process."""
-    from contact_detector.model.bundle import load_bundle
+    from contact_detector.model.storage import load_bundle
 
     return load_bundle(path=model_path(directory, allow_shipped=False))
 

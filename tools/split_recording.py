@@ -33,7 +33,7 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from contact_detector.model.training import read_labels_csv
+from contact_detector.training.protocol import read_labels_csv
 from rosbags.rosbag1 import Reader, Writer
 
 

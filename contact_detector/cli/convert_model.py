@@ -29,8 +29,9 @@ import sys
 from typing import Optional, Sequence
 
 from contact_detector.errors import ContactDetectorError
-from contact_detector.model.bundle import FORMATS, load_bundle, ModelBundle, save_bundle
+from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.forest_arrays import boundary_frames
+from contact_detector.model.storage import FORMATS, load_bundle, save_bundle
 
 #: Frames compared with scikit-learn beyond save_bundle's own check.
 CHECK_ROWS = 50000

@@ -40,7 +40,7 @@ import time
 from typing import List, Optional, Sequence
 
 from contact_detector.evaluation.metrics import score_trial, summarize, Truth
-from contact_detector.model.bundle import default_model_path
+from contact_detector.model.shipped import default_model_path
 from contact_detector.sim.bag_writer import write_manifest, write_trial_bag
 from contact_detector.sim.trial import simulate_trial, Trial
 import numpy as np

@@ -33,6 +33,8 @@ from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags, manifest_entry, read_truth, read_wrench
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
+from contact_detector.model.shipped import default_model_path
+from contact_detector.model.storage import load_bundle
 import numpy as np
 
 PROG = 'contact-detector plot'
@@ -53,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('-o', '--output', required=True, type=Path, metavar='PNG',
                         help='output image (png, pdf or svg by suffix)')
     parser.add_argument('--feature-config', type=Path, default=None, metavar='FILE',
-                        help='JSON (or YAML) FeatureConfig; top level or under "features"')
+                        help='JSON (or YAML) FeatureConfig; top level or under "features" '
+                             "(default: the shipped model's card)")
     parser.add_argument('--audio-rate', type=float, default=None, metavar='HZ',
                         help='audio sample rate (default: from the bag, else the manifest, '
                              'else estimated)')
@@ -67,9 +70,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def load_feature_config(path: Path | None) -> FeatureConfig:
-    """Load a FeatureConfig from a JSON/YAML file (keys at top level or under 'features')."""
+    """
+    Load a FeatureConfig from a JSON/YAML file (keys at top level or under 'features').
+
+    Without a file, the configuration of the shipped model's card.
+    """
     if path is None:
-        return FeatureConfig()
+        return load_bundle(path=default_model_path()).feature_config
     try:
         text = path.read_text(encoding='utf-8')
     except OSError as err:

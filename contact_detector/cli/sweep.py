@@ -17,6 +17,7 @@
 
     contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
     contact-detector sweep DIR... --lofo [--lofo-settings shipped,invariant] [--out FILE.md]
+    contact-detector sweep DIR... --model M [--own-test TRAIN_DIR] [--out FILE.md]
 
 With ``--lofo`` every trial of every folder is pooled and grouped by family (its condition set
 in the manifest); for each family a forest is trained on all the others and every candidate
@@ -28,104 +29,31 @@ on the training trials, then scores every decision rule on the held-out trials: 
 misses, premature releases, latency, contact events blamed on exogenous impacts, frame
 precision/recall. With ``--ablation`` it also trains on all condition sets but one and tests on
 the one left out (heavy, soft, noisy, gain), for the settings that are meant to generalise.
+``--seeds 0,1,2,3`` trains one forest per seed for the grid and the ablation and sums the
+counts over the seeds (latency: the median of the per-seed medians): a 10-tree forest is a
+noisy estimator, and one forest cannot tell two close settings apart.
+
+With ``--model`` no forest is trained: the rules (the model's own, the threshold x
+confirmation grid, single-frame paths with a slow path) are scored with that model's features,
+labels and trees on every trial of the folders, and with ``--own-test`` also on the model's own
+trial-split test trials found in TRAIN_DIR: the check of a rule on the model that ships.
 """
 
 import argparse
-from dataclasses import replace
 import json
 from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
-from contact_detector.cli.evaluate import truth_for
-from contact_detector.cli.train import conditions_of, DEFAULT_FEATURES, DEFAULT_RULE
-from contact_detector.features.config import FeatureConfig
+from contact_detector.errors import ContactDetectorError
 from contact_detector.io.bags import find_bags
-from contact_detector.io.sensor_stream import load_events, StreamSpec
-from contact_detector.model.bundle import DecisionRule
-from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetting,
-                                          fit_forest, leave_one_family_out, rows_markdown,
-                                          score_rules, worst_family)
-from contact_detector.model.training import LabelWindow
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.storage import load_bundle
+from contact_detector.training.recipe import DEFAULT_RULE
+from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
+                                               LOFO_SETTINGS, lofo_study, model_study, STATE)
+from contact_detector.training.sweep import decode_bags, rows_markdown, seed_rows_markdown
 from tqdm import tqdm
-
-EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
-#: The audio features measured against the tracked noise floor, and the two of round 4.
-ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
-RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
-#: The two F/T features of round 5.
-CHANGE_MAX = ('force_change_max', 'torque_change_max')
-ONSET = LabelWindow(0.0, 0.1)
-STATE = LabelWindow(0.0, 0.3)
-
-
-def feature_grid(name: str) -> List[FeatureSetting]:
-    """Return the feature settings to try: 'compare', 'focus' or 'full' (both)."""
-    paper = FeatureConfig(ft_window=160, ft_hop=128)
-    base = FeatureConfig(ft_window=32, ft_hop=1)
-    ours = FeatureConfig(ft_detrend='mean', extra_features=EXTRAS)
-    compare = [
-        FeatureSetting('paper W160 H128, onset labels', paper, ONSET),
-        FeatureSetting('W32 H1, onset labels', base, ONSET),
-        FeatureSetting('W32 H1, state labels', base, STATE),
-        FeatureSetting('W32 H1 detrend, state labels', FeatureConfig(ft_detrend='mean'), STATE),
-        FeatureSetting('W32 H1 detrend+extras, onset labels', ours, ONSET),
-        FeatureSetting('W32 H1 detrend+extras, state labels', ours, STATE),
-    ]
-    focus = [
-        FeatureSetting('detrend+extras, state labels, delta lag 5',
-                       replace(ours, delta_lag=5), STATE),
-        FeatureSetting('detrend+extras, state labels, delta lag 3',
-                       replace(ours, delta_lag=3, delta_window=2), STATE),
-        FeatureSetting('detrend+extras, labels 0-0.2 s', ours, LabelWindow(0.0, 0.2)),
-        FeatureSetting('detrend+extras, labels 0-0.5 s', ours, LabelWindow(0.0, 0.5)),
-        FeatureSetting('W16 H1 detrend+extras, state labels', replace(ours, ft_window=16),
-                       STATE),
-        FeatureSetting('W64 H1 detrend+extras, state labels', replace(ours, ft_window=64),
-                       STATE),
-        FeatureSetting('W32 H4 detrend+extras, state labels', replace(ours, ft_hop=4), STATE),
-        FeatureSetting('audio 16 ms / 5 ms, detrend+extras, state labels',
-                       replace(ours, audio_frame_s=0.016, audio_hop_s=0.005), STATE),
-    ]
-    return {'compare': compare, 'focus': focus, 'full': compare + focus, 'none': []}[name]
-
-
-def rule_grid() -> List[DecisionRule]:
-    """Thresholds x confirmation frames."""
-    return [DecisionRule(threshold=th, confirm_frames=k, refractory_s=1.0)
-            for th in (0.3, 0.5, 0.7, 0.9) for k in (1, 2, 3, 5)]
-
-
-def ablation_settings() -> List[FeatureSetting]:
-    """Return the settings compared on held-out condition sets (the shipped window, W64)."""
-    full = DEFAULT_FEATURES
-    paper7 = replace(full, ft_detrend='none', extra_features=())
-    return [
-        FeatureSetting('paper 7 features, no detrend', paper7, STATE),
-        FeatureSetting('paper 7, detrend', replace(paper7, ft_detrend='mean'), STATE),
-        FeatureSetting('detrend + extras (shipped)', full, STATE),
-        FeatureSetting('shipped, without the vector shifts', full, STATE,
-                       columns=tuple(n for n in full.feature_names if n not in _SHIFT)),
-        FeatureSetting('shipped, without raw audio power', full, STATE,
-                       columns=tuple(n for n in full.feature_names if n != 'audio_power')),
-        FeatureSetting('shipped, without the *_change_max features (round 4)', full, STATE,
-                       columns=tuple(n for n in full.feature_names if n not in CHANGE_MAX)),
-        FeatureSetting('shipped, without the audio onset features', full, STATE,
-                       columns=tuple(n for n in full.feature_names if n not in ONSET_AUDIO)),
-        FeatureSetting('shipped, without the dB-above-floor features', full, STATE,
-                       columns=tuple(n for n in full.feature_names
-                                     if n not in RELATIVE_AUDIO)),
-        FeatureSetting('audio only (power, dB above floor, its peak, rise and gap)', full, STATE,
-                       columns=('audio_power',) + RELATIVE_AUDIO),
-        FeatureSetting('F/T only', full, STATE,
-                       columns=tuple(n for n in full.feature_names
-                                     if not n.startswith('audio'))),
-        FeatureSetting('reduced: dB above floor, recent peak, torque centroid/spread, shifts',
-                       full, STATE,
-                       columns=('audio_power_rel_db', 'audio_peak_rel_db', 'torque_centroid',
-                                'torque_spread', 'force_shift', 'torque_shift',
-                                'force_shift_min')),
-    ]
 
 
 def thresholds(text: str) -> List[float]:
@@ -139,14 +67,21 @@ def thresholds(text: str) -> List[float]:
     return values
 
 
+def seed_list(text: str) -> List[int]:
+    """Parse ``0,1,2,3`` into forest seeds (argparse type)."""
+    try:
+        seeds = [int(v) for v in text.split(',') if v.strip()]
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'not a list of seeds: {text!r}') from err
+    if not seeds:
+        raise argparse.ArgumentTypeError(f'no seed in {text!r}')
+    return seeds
+
+
 def decode(bags, spec, tag):
-    """Decode every bag once: 'tag/name' -> (events, truth)."""
-    manifest = conditions_of(bags)
-    out = {}
-    for bag in tqdm(bags, desc=f'decode {tag}', unit='bag'):
-        events = load_events(bag, spec=spec)
-        out[f'{tag}/{bag.name}'] = (events, truth_for(bag, events, manifest))
-    return out
+    """Decode every bag once, with a progress bar: 'tag/name' -> (events, truth)."""
+    return decode_bags(bags=bags, spec=spec, tag=tag,
+                       progress=lambda b: tqdm(b, desc=f'decode {tag}', unit='bag'))
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -172,14 +107,40 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              f'(default {DEFAULT_RULE.sustain_threshold})')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seeds', type=seed_list, default=None, metavar='LIST',
+                        help='forest seeds, comma-separated: grid and ablation summed over '
+                             'one forest per seed (default: --seed alone)')
+    parser.add_argument('--model', type=Path, default=None,
+                        help='score the rules with this trained model instead of training')
+    parser.add_argument('--own-test', type=Path, default=None, metavar='TRAIN_DIR',
+                        help="--model: also score the model's own test trials in TRAIN_DIR")
     parser.add_argument('--audio-rate', type=float, default=16000.0)
     parser.add_argument('--wrench-rate', type=float, default=100.0)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
     spec = StreamSpec()
+    if args.own_test is not None and args.model is None:
+        parser.error('--own-test needs --model')
+    if args.model is not None:
+        try:
+            output = with_model(args, spec)
+        except ContactDetectorError as err:
+            print(f'contact-detector sweep: {err}', file=sys.stderr)
+            return 1
+        print(output)
+        if args.out:
+            args.out.write_text(output)
+        return 0
     if args.lofo:
-        output = lofo(args, spec)
+        trials = {}
+        for i, folder in enumerate(args.bags):
+            trials.update(decode(find_bags([folder]), spec, f'{i}'))
+        output = lofo_study(trials=trials, settings=args.lofo_settings.split(','),
+                            label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
+                            audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
+                            jobs=args.jobs,
+                            progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         print(output)
         if args.out:
             args.out.write_text(output)
@@ -188,32 +149,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         parser.error('give TRAIN_DIR and HELDOUT_DIR (or --lofo with any folders)')
     train = decode(find_bags([args.bags[0]]), spec, 'train')
     heldout = decode(find_bags([args.bags[1]]), spec, 'heldout')
-    rules = rule_grid()
-    rows, best_rows = [], []
-    cache = {}
-    for setting in tqdm(feature_grid(args.grid), desc='settings', unit='setting'):
-        key = setting.config
-        if key not in cache:
-            cache = {key: (compute_frames(events_by_trial=train, config=key,
-                                          audio_rate=args.audio_rate,
-                                          wrench_rate=args.wrench_rate, jobs=args.jobs),
-                           compute_frames(events_by_trial=heldout, config=key,
-                                          audio_rate=args.audio_rate,
-                                          wrench_rate=args.wrench_rate, jobs=args.jobs))}
-        train_frames, heldout_frames = cache[key]
-        forest = fit_forest(frames=list(train_frames.values()), setting=setting,
-                            n_estimators=10, seed=args.seed, jobs=args.jobs)
-        scored = score_rules(forest=forest, frames=list(heldout_frames.values()),
-                             setting=setting, rules=rules)
-        rows += scored
-        best_rows.append(best_row(scored))
+    rows, best_rows, totals = grid_study(
+        train=train, heldout=heldout, settings=feature_grid(args.grid), seeds=args.seeds,
+        seed=args.seed, audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, jobs=args.jobs,
+        progress=lambda items: tqdm(items, desc='settings', unit='setting'))
     text = []
+    if totals:
+        text += ['## Every rule, summed over the forest seeds (held-out trials)', '',
+                 seed_rows_markdown(totals, seeds=args.seeds), '']
     if rows:
         text += ['## Best rule per setting (held-out trials)', '', rows_markdown(best_rows), '',
                  '## Every rule', '', rows_markdown(rows), '']
     if args.ablation:
         text += ['## Ablation: train on the other condition sets, test on the one left out',
-                 '', ablation(train, heldout, args), '']
+                 '', ablation_study(
+                     trials={**train, **heldout}, sustain=args.ablation_sustain,
+                     seeds=args.seeds or [args.seed], audio_rate=args.audio_rate,
+                     wrench_rate=args.wrench_rate, jobs=args.jobs,
+                     progress=lambda items: tqdm(items, desc='ablation', unit='setting')),
+                 '']
     output = '\n'.join(text)
     print(output)
     if args.out:
@@ -223,115 +177,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     return 0
 
 
-_SPECTRAL = ('force_centroid', 'force_spread', 'force_flux', 'torque_centroid', 'torque_spread',
-             'torque_flux')
-_SHIFT = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
-          'force_shift_max', 'torque_shift_max')
-_SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_max')
-#: The feature settings --lofo compares: name -> columns (None: the shipped model's).
-LOFO_SETTINGS = {
-    'shipped': None,
-    'round5': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
-        'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
-        'ft_change_angle', 'force_change_max', 'torque_change_max'),
-    'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
-    'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
-    'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
-    'ft-only': _SPECTRAL + _SHIFT,
-}
-
-
-def lofo_rules() -> List[DecisionRule]:
-    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
-    rules = [DEFAULT_RULE]
-    rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
-    rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
-              for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
-    return rules
-
-
-def lofo(args, spec) -> str:
-    """Leave-one-family-out over the pooled folders; per setting and rule the worst family."""
-    from contact_detector.features.config import EXTRA_FEATURES
-    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
-    trials = {}
+def with_model(args, spec) -> str:
+    """Decode the model's own test trials (``--own-test``) and the folders; score the rules."""
+    bundle = load_bundle(path=args.model)
+    groups = []
+    if args.own_test is not None:
+        test = set(bundle.training.get('test_trials', []))
+        own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
+        groups.append((f'own {len(own)} test trials', decode(own, spec, 'own')))
     for i, folder in enumerate(args.bags):
-        trials.update(decode(find_bags([folder]), spec, f'{i}'))
-    frames = list(compute_frames(events_by_trial=trials, config=config,
-                                 audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
-                                 jobs=args.jobs).values())
-    rules = lofo_rules()
-    worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
-                   'p95 [ms] | all families: detected / premature |',
-                   '|---|---|---|---|---|---|---|---|']
-    family_lines = ['| setting | rule | family | detected | premature | impact events | '
-                    'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
-    for name in tqdm(args.lofo_settings.split(','), desc='lofo', unit='setting'):
-        columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
-        setting = FeatureSetting(name, config, LabelWindow(0.0, args.lofo_label_end),
-                                 columns=tuple(columns))
-        folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
-                                     n_estimators=args.trees, seed=args.seed, jobs=args.jobs)
-        for k, rule in enumerate(rules):
-            summaries = []
-            for fold in folds:
-                s = dict(fold.rows[k].summary, family=fold.family)
-                summaries.append(s)
-                family_lines.append(f'| {name} | {rule.short()} | {fold.family} | '
-                                    f"{s['detected']}/{s['trials']} | {s['premature']} | "
-                                    f"{s['impact_events']} | {_ms(s['latency_ms_median'])} | "
-                                    f"{_ms(s['latency_ms_p95'])} |")
-            w = worst_family(summaries)
-            if w is None:
-                continue
-            total = sum(s['detected'] for s in summaries)
-            trials_n = sum(s['trials'] for s in summaries)
-            early = sum(s['premature'] for s in summaries)
-            worst_lines.append(f"| {name} | {rule.short()} | {w['family']} | "
-                               f"{w['detected']}/{w['trials']} | {w['premature']} | "
-                               f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
-                               f'{total}/{trials_n} / {early} |')
-    return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
-                      *worst_lines, '', '## Every family', '', *family_lines, ''])
-
-
-def _ms(value) -> str:
-    return '-' if value is None else f'{value:.0f}'
-
-
-def ablation(train, heldout, args) -> str:
-    """Leave-one-condition-out table for the ablation settings (the default rule)."""
-    everything = {**train, **heldout}
-    rules = [replace(DEFAULT_RULE, sustain_threshold=th) for th in args.ablation_sustain]
-    lines = [f'Rule: {DEFAULT_RULE.short()} (slow-path thresholds '
-             f"{', '.join(str(th) for th in args.ablation_sustain)}); forest of 10 trees "
-             'trained on every trial of the other condition sets.', '',
-             '| setting | held-out condition | slow path | detected | premature | '
-             'impact events | latency median [ms] |', '|---|---|---|---|---|---|---|']
-    cache = {}
-    for setting in tqdm(ablation_settings(), desc='ablation', unit='setting'):
-        if setting.config not in cache:
-            cache = {setting.config: compute_frames(
-                events_by_trial=everything, config=setting.config,
-                audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, jobs=args.jobs)}
-        frames = cache[setting.config]
-        for condition in ('heavy', 'soft', 'noisy', 'gain'):
-            fit = [f for f in frames.values() if f.truth.condition != condition]
-            test = [f for f in frames.values() if f.truth.condition == condition]
-            if not test:
-                continue
-            forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=args.seed,
-                                jobs=args.jobs)
-            scored = score_rules(forest=forest, frames=test, setting=setting, rules=rules)
-            for rule, row in zip(rules, scored):
-                s = row.summary
-                median = ('-' if s['latency_ms_median'] is None
-                          else f"{s['latency_ms_median']:.0f}")
-                slow = f'mean{rule.sustain_frames}>={rule.sustain_threshold}'
-                lines.append(f'| {setting.name} | {condition} | {slow} | '
-                             f"{s['detected']}/{s['trials']} | {s['premature']} | "
-                             f"{s['impact_events']} | {median} |")
-    return '\n'.join(lines)
+        trials = decode(find_bags([folder]), spec, f'{i}')
+        groups.append((f'{Path(folder).name}: {len(trials)} trials', trials))
+    return model_study(bundle=bundle, groups=groups,
+                       title=f'## Rules scored with {args.model.name} ({bundle.model_id})',
+                       audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
+                       jobs=args.jobs)
 
 
 if __name__ == '__main__':

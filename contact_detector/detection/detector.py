@@ -22,7 +22,7 @@ import and reads no clock: every call passes the stream times (and, optionally, 
 time the message was received, for the staleness check).
 """
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 import math
 from typing import Optional, Sequence, Union
 
@@ -31,7 +31,8 @@ from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
-from contact_detector.model.bundle import DecisionRule, ModelBundle
+from contact_detector.model.bundle import ModelBundle
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 
 #: A dropped message's stamp is trusted at most this far ahead of the newest accepted input, s
@@ -480,7 +481,3 @@ class ContactDetector:
         return Decisions(t=frames.t, p=np.array([p]), contact=np.array([contact]),
                          valid=np.array([valid]), releases=releases,
                          events=list(self.logic.last_events))
-
-    def with_rule(self, rule: DecisionRule) -> 'ContactDetector':
-        """Return a fresh detector with the same model and another decision rule."""
-        return ContactDetector(bundle=self.bundle, settings=replace(self.settings, rule=rule))

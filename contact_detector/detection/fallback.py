@@ -124,11 +124,6 @@ class AudioFallback:
         out['model_switches'] = self.switches
         return out
 
-    def set_rules(self, *, primary, fallback) -> None:
-        """Apply decision rules to the two detectors (each model has its own)."""
-        self.primary.set_rule(primary)
-        self.fallback.set_rule(fallback)
-
     def arm(self, armed: bool) -> None:
         """Arm or disarm the release (of the active model; the other stays disarmed)."""
         self.active.arm(armed)

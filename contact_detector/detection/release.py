@@ -24,7 +24,7 @@ import math
 from typing import Any, Dict, Mapping, Optional
 
 from contact_detector.errors import ConfigError
-from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 
 #: Node parameter -> (DecisionRule field, smallest value that overrides the model's rule).

@@ -38,7 +38,7 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.features.config import FeatureConfig
-from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 from scipy import signal
 
@@ -224,7 +224,7 @@ class AudioOnsetBaseline(_Baseline):
 
     def __init__(self, *, db: float = 20.0, **kw) -> None:
         self.db = db
-        self.config = FeatureConfig()
+        self.config = FeatureConfig.paper()  # the paper's audio frames and noise floor
         super().__init__(**kw)
 
     def reset(self) -> None:

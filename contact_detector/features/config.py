@@ -17,7 +17,7 @@ Feature configuration: the contract between the feature core, the model file and
 
 A :class:`FeatureConfig` fully determines the feature vector computed for every audio frame.
 It is stored inside every model bundle; loading a model refuses a configuration that differs
-from the one the running code would use (see :mod:`contact_detector.model.bundle`).
+from the one the running code would use (see :mod:`contact_detector.model.storage`).
 """
 
 from dataclasses import asdict, dataclass, fields
@@ -168,6 +168,16 @@ class FeatureConfig:
         extra feature (refused); rows are then clocked by the F/T feature frames, one row per
         F/T feature frame, for robots without a microphone.
 
+    Notes
+    -----
+    Two named presets say where a configuration comes from: :meth:`paper` (the paper's
+    160-sample F/T window every 128 samples, its seven features) and :meth:`shipped` (what the
+    shipped model ``models/contact_forest.npz`` was trained with, the ``train`` command's
+    defaults). The bare ``FeatureConfig()`` is neither: its field defaults are the base that
+    the presets and :meth:`from_dict` fill in, the paper's seven features on a 0.32 s F/T
+    window updated at every sample, and serve unit tests of the feature core. At run time the
+    configuration comes from the model's card (``bundle.feature_config``), never from here.
+
     """
 
     audio_frame_s: float = 0.032
@@ -225,6 +235,39 @@ class FeatureConfig:
         if not self.audio and audio_extra:
             raise ConfigError(f'FeatureConfig.audio is false (an F/T-only model) but '
                               f'extra_features has the audio features {audio_extra}')
+
+    @classmethod
+    def paper(cls) -> 'FeatureConfig':
+        """
+        Return the paper's configuration (arXiv 2012.01583, section 4.2).
+
+        Audio frames of 512 samples every 160 at 16 kHz (0.032 s / 0.010 s); the F/T DFT over
+        ``ft_window = 160`` samples every ``ft_hop = 128``, rectangular window, no detrending;
+        the seven features of :data:`PAPER_FEATURES` and no extra ones.
+        """
+        return cls(audio_frame_s=0.032, audio_hop_s=0.010, ft_window=160, ft_hop=128,
+                   ft_window_fn='rect', ft_detrend='none', extra_features=())
+
+    @classmethod
+    def shipped(cls) -> 'FeatureConfig':
+        """
+        Return the configuration of the shipped model, the defaults of ``contact-detector train``.
+
+        Chosen by leave-one-family-out (docs/generalisation.md): a 0.64 s F/T window updated
+        at every sample with its mean removed; audio loudness relative to the room (dB above
+        the noise floor, its recent peak, rise and gap); the change of |F| and |T| against a
+        median baseline and its recent maximum; the orientation- and tare-free length of the
+        force and torque vector change with its 0.1 s minimum and 0.5 s maximum. The shipped
+        model's card holds the same configuration (a test checks it).
+        """
+        return cls(ft_window=64, ft_hop=1, ft_detrend='mean', delta_window=1, delta_lag=5,
+                   rise_frames=2, change_max_frames=50, shift_min_frames=10, shift_lag=20,
+                   shift_window=40,
+                   extra_features=('audio_power_rel_db', 'audio_peak_rel_db', 'audio_rise_db',
+                                   'audio_peak_gap_db', 'force_change', 'torque_change',
+                                   'force_change_max', 'torque_change_max', 'force_shift',
+                                   'torque_shift', 'force_shift_min', 'torque_shift_min',
+                                   'force_shift_max', 'torque_shift_max'))
 
     @property
     def feature_names(self) -> tuple:

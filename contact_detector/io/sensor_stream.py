@@ -33,8 +33,6 @@ from contact_detector.io.bags import AudioSeries, iter_messages
 from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
 import numpy as np
 
-DEFAULT_AUDIO_TYPE = 'std_msgs/msg/Int16MultiArray'
-
 
 @dataclass(frozen=True)
 class StreamSpec:

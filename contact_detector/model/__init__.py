@@ -12,19 +12,20 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The model layer: bundles (save/load with checks), forest arrays, the compiled forest."""
+"""
+The model layer: the bundle and its rule, save/load with checks, the card, the forest.
 
-from contact_detector.model.bundle import (
-    DecisionRule,
-    default_ft_model_path,
-    default_model_path,
-    load_bundle,
-    ModelBundle,
-    runtime_versions,
-    save_bundle,
-)
+``bundle`` (:class:`ModelBundle`), ``rule`` (:class:`DecisionRule`), ``storage``
+(:func:`save_bundle`, :func:`load_bundle`), ``card`` (the model card), ``shipped`` (where the
+shipped models are, without ROS), ``forest_arrays`` and ``compiled_forest`` (the trees).
+"""
+
+from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.forest_arrays import ForestArrays
+from contact_detector.model.rule import DecisionRule
+from contact_detector.model.shipped import default_ft_model_path, default_model_path
+from contact_detector.model.storage import load_bundle, save_bundle
 
 __all__ = [
     'CompiledForest',

@@ -49,13 +49,12 @@ match; models are trained and compared with ``n_jobs=None``.
 """
 
 from collections import OrderedDict
-import hashlib
 import math
 import threading
 from typing import Any, Callable, List, Sequence, Tuple
 
 from contact_detector.errors import InputError, ModelError
-from contact_detector.model.forest_arrays import ForestArrays, update_tree_digest
+from contact_detector.model.forest_arrays import ForestArrays
 import numpy as np
 
 #: Levels of each tree compiled to Python code. Python's tokenizer refuses more than 100 levels
@@ -77,24 +76,6 @@ _cache: 'OrderedDict[tuple, CompiledForest]' = OrderedDict()
 _cache_lock = threading.Lock()
 
 _Node = Tuple[int, float, Any, Any]
-
-
-def forest_content_sha256(forest: Any) -> str:
-    """
-    SHA-256 of a fitted forest's trees: structure, thresholds and leaf values, in tree order.
-
-    Independent of the file format and of pickling details, so it identifies what the forest
-    computes (two forests with equal hashes give equal predictions).
-    """
-    if isinstance(forest, ForestArrays):
-        return forest.content_sha256
-    digest = hashlib.sha256()
-    for estimator in forest.estimators_:
-        tree = estimator.tree_
-        update_tree_digest(digest, children_left=tree.children_left,
-                           children_right=tree.children_right, feature=tree.feature,
-                           threshold=tree.threshold, value=tree.value)
-    return digest.hexdigest()
 
 
 def _walk(x: List[float], node: _Node) -> float:

@@ -64,11 +64,12 @@ from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
                                           AudioFormat, AudioMsgType, check_stamp, wrench_sample)
-from contact_detector.model.bundle import (default_ft_model_path, default_model_path,
-                                           load_bundle, ModelBundle)
+from contact_detector.model.bundle import ModelBundle
+from contact_detector.model.storage import load_bundle
 from contact_detector.ros.audio_format import AudioFormatNegotiation
 from contact_detector.ros.diagnostics import DiagnosticsMixin, InputStream
 from contact_detector.ros.gripper import open_gripper_trajectory
+from contact_detector.ros.model_search import default_ft_model_path, default_model_path
 from contact_detector.ros.params import (config_from_values, current_values,
                                          declare_parameters, NodeConfig, PARAMS_BY_NAME)
 from diagnostic_msgs.msg import DiagnosticArray

@@ -32,7 +32,7 @@ from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, MAX_SAMPLE_RATE, MIN_SAMPLE_RATE,
                                           normalise_msg_type)
-from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.rule import DecisionRule
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node

@@ -31,7 +31,8 @@ from contact_detector.features.audio import NoiseFloor
 from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, StreamSpec,
                                                WrenchEvent)
-from contact_detector.model.bundle import default_model_path, load_bundle
+from contact_detector.model.shipped import default_model_path
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
 import numpy as np

@@ -18,6 +18,7 @@ import json
 from pathlib import Path
 
 from contact_detector.cli import detect as detect_cli
+from contact_detector.detection import factory
 from contact_detector.errors import BagError
 from contact_detector.io.bags import find_bags, iter_cdr, iter_messages
 from contact_detector.io.discovery import discover_streams, snap_audio_rate
@@ -192,7 +193,7 @@ def test_audio_info_and_stamps_give_the_format_without_flags(tmp_path, kind):
         22050.0, 'AudioInfo', 2)
     assert found.wrench_rate == pytest.approx(200.0, rel=1e-4)
     assert found.wrench_rate_source == 'stamps' and not found.warnings
-    events = load_events(bag, spec=detect_cli.stream_spec(found, {}))
+    events = load_events(bag, spec=factory.stream_spec(found, {}))
     audio = [e for e in events if isinstance(e, AudioEvent)]
     assert len(audio) == 50 and all(e.samples.size == 441 for e in audio)   # mixed to mono
     # flags win over what the bag says

@@ -21,10 +21,10 @@ from contact_detector.cli import label as label_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.errors import InputError
 from contact_detector.evaluation.labelling import hinge_fit, NO_CHANGE, propose_onset
-from contact_detector.model.bundle import load_bundle
-from contact_detector.model.training import read_labels_csv
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
+from contact_detector.training.protocol import read_labels_csv
 import numpy as np
 import pytest
 

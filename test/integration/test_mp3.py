@@ -18,6 +18,7 @@ import io
 from types import SimpleNamespace as NS
 
 from contact_detector.cli import detect as detect_cli
+from contact_detector.detection import factory
 from contact_detector.errors import ConfigError
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.messages import check_audio_info
@@ -102,7 +103,7 @@ def test_mp3_click_keeps_its_time(tmp_path, rate, tagged, piece, kind):
     found = discover_streams(bag)
     assert (found.coding, found.audio_rate) == ('mp3', rate)
     assert found.audio_rate_source == 'AudioInfo'
-    events = load_events(bag, spec=detect_cli.stream_spec(found, {}))
+    events = load_events(bag, spec=factory.stream_spec(found, {}))
     audio = [e for e in events if isinstance(e, AudioEvent)]
     total = sum(e.samples.size for e in audio)
     # every input sample is there once (the end padding of an untagged stream at most more)
@@ -147,7 +148,7 @@ def test_mp3_without_audio_info_is_found_from_its_frame_headers(tmp_path, rate, 
     found = discover_streams(bag)
     assert (found.coding, found.audio_rate, found.channels) == ('mp3', rate, 1)
     assert found.audio_rate_source == 'mp3 header' and not found.warnings
-    events = load_events(bag, spec=detect_cli.stream_spec(found, {}))
+    events = load_events(bag, spec=factory.stream_spec(found, {}))
     assert abs(click_time(events) - (T_START_NS * 1e-9 + CLICK_S)) < 1e-3
 
 

@@ -31,7 +31,7 @@ import time
 
 from contact_detector.detection.detector import ContactDetector
 from contact_detector.errors import ConfigError, ModelError
-from contact_detector.model.bundle import load_bundle
+from contact_detector.model.storage import load_bundle
 from contact_detector.ros.executor import HotPathExecutor
 from contact_detector.ros.node import ContactDetectorNode
 from contact_detector.ros.params import PARAMS

@@ -24,7 +24,8 @@ import time
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.errors import ConfigError
-from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
+from contact_detector.model.shipped import default_ft_model_path, default_model_path
+from contact_detector.model.storage import load_bundle
 from contact_detector.ros.node import ContactDetectorNode
 from contact_detector.sim.trial import simulate_trial
 from diagnostic_msgs.msg import DiagnosticArray

@@ -24,7 +24,8 @@ from pathlib import Path
 
 from contact_detector.cli import main as cli_main
 from contact_detector.io.bags import topic_types
-from contact_detector.model.bundle import default_ft_model_path, load_bundle
+from contact_detector.model.shipped import default_ft_model_path
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
 import pytest
@@ -67,7 +68,7 @@ def test_detect_uses_the_shipped_ft_model_without_audio(no_audio, tmp_path, caps
 
 def test_a_multimodal_model_refuses_a_recording_without_audio(no_audio, tmp_path, capsys):
     # --model wins, and a model that needs audio cannot decide such a recording: an error.
-    from contact_detector.model.bundle import default_model_path
+    from contact_detector.model.shipped import default_model_path
     out = tmp_path / 'm.jsonl'
     assert cli_main.main(['detect', str(no_audio / 'trial_0001'), '--model',
                           str(default_model_path()), '--out', str(out)]) == 1

@@ -28,20 +28,22 @@ from pathlib import Path
 import subprocess
 import sys
 
-from contact_detector.cli import detect as detect_cli
 from contact_detector.cli import main as cli_main
 from contact_detector.cli import sweep as sweep_cli
 from contact_detector.cli import train as train_cli
+from contact_detector.detection import factory
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.baselines import BASELINES, make_baseline
 from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize,
                                                  summarize_by_condition, Truth)
+from contact_detector.io import node_params
 from contact_detector.io.bags import jazzy_typestore, open_reader
 from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, WrenchEvent)
-from contact_detector.model.bundle import load_bundle
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trial, simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+from contact_detector.training import recipe, studies
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
@@ -557,7 +559,7 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
                            '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     # Without options, train uses the shipped features; the F/T change windows are options.
-    assert data['bundle'].feature_config == train_cli.DEFAULT_FEATURES
+    assert data['bundle'].feature_config == recipe.DEFAULT_FEATURES
     config = bundle.feature_config
     assert (config.delta_window, config.delta_lag, config.baseline_window,
             config.rise_frames, config.change_max_frames) == (2, 4, 9, 3, 7)
@@ -572,8 +574,8 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
     params = tmp_path / 'p.yaml'
     params.write_text('contact_detector:\n  ros__parameters:\n    release:\n'
                       '      sustain_frames: 0\n      threshold: 0.99\n')
-    settings, _, _, rule = detect_cli.settings_from_params(
-        detect_cli.read_node_params(params), audio_rate=None)
+    settings, _, _, rule = factory.settings_from_params(
+        node_params.read_node_params(params), audio_rate=None)
     assert rule == {'threshold': 0.99, 'sustain_frames': 0}
     for bad in ('0', 'x', '5-3'):
         with pytest.raises(SystemExit):
@@ -593,7 +595,7 @@ def test_sweep_ablation_scores_each_slow_path_threshold(data, tmp_path, capsys):
     rows = [r for r in rows if not r[0].startswith('---')]
     by_key = {(r[0], r[1], r[2]): r for r in rows}
     settings = {r[0] for r in rows}
-    assert len(settings) == len(sweep_cli.ablation_settings())
+    assert len(settings) == len(studies.ablation_settings())
     assert {r[2] for r in rows} == {'mean15>=0.5', 'mean15>=0.3'}
     for setting, condition, slow in by_key:
         if slow != 'mean15>=0.5':

@@ -27,7 +27,7 @@ import sys
 from contact_detector.cli import evaluate as evaluate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
-from contact_detector.model.bundle import load_bundle
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import write_trial_bag
 import pytest

@@ -17,7 +17,8 @@
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback, FT_ONLY, MULTIMODAL
 from contact_detector.errors import ConfigError
-from contact_detector.model.bundle import default_ft_model_path, default_model_path, load_bundle
+from contact_detector.model.shipped import default_ft_model_path, default_model_path
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim.trial import simulate_trial
 import numpy as np
 import pytest

@@ -30,7 +30,8 @@ from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureCon
 from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, WrenchEvent
-from contact_detector.model.bundle import DecisionRule, ModelBundle, runtime_versions
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier

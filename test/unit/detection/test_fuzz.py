@@ -50,8 +50,9 @@ from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to
                                           check_audio_info, check_stamp, embedded_audio_format,
                                           normalise_msg_type, stamp_to_seconds,
                                           wrench_to_arrays)
-from contact_detector.model.bundle import (DecisionRule, load_bundle, ModelBundle,
-                                           runtime_versions, save_bundle)
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.rule import DecisionRule
+from contact_detector.model.storage import load_bundle, save_bundle
 from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ ALLOWED = (InputError, ConfigError)
 
 @pytest.fixture(scope='module')
 def bundle(tmp_path_factory):
-    """Return a real (tiny) forest on random features, saved and loaded through model/bundle.py."""
+    """Return a real (tiny) forest on random features, saved and loaded by model/storage.py."""
     config = FeatureConfig()
     rng = np.random.default_rng(0)
     x = rng.normal(0.0, 1.0, (400, config.n_features))

@@ -16,7 +16,7 @@
 
 from contact_detector.detection.release import ReleaseLogic, rule_overrides
 from contact_detector.errors import ConfigError
-from contact_detector.model.bundle import DecisionRule
+from contact_detector.model.rule import DecisionRule
 import numpy as np
 import pytest
 

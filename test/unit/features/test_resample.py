@@ -16,7 +16,7 @@
 
 import dataclasses
 
-from contact_detector.cli import detect as detect_cli
+from contact_detector.detection import factory
 from contact_detector.errors import ConfigError
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.force_torque import ForceTorqueStream
@@ -143,8 +143,8 @@ def _upsampled(trial, rate):
 @pytest.mark.slow
 @pytest.mark.parametrize('index', [0, 1])
 def test_simulated_trials_at_every_rate_are_detected_like_at_100_hz(tmp_path, index):
-    make, stream = detect_cli.build_detector_factory(model=None, params_file=None,
-                                                     audio_rate=None)
+    make, stream = factory.build_detector_factory(model=None, params_file=None,
+                                                  audio_rate=None)
     latency = {}
     for rate in [100.0, 50.0, 51.0, 125.0, 200.0, 333.0, 500.0, 1000.0, 10000.0]:
         if rate > 5000:
@@ -154,8 +154,8 @@ def test_simulated_trials_at_every_rate_are_detected_like_at_100_hz(tmp_path, in
         bag = write_trial_bag(trial=trial, path=tmp_path / f'{rate:g}')
         found = discover_streams(bag, param_audio_rate=trial.audio_rate)
         assert found.wrench_rate == pytest.approx(rate, rel=0.01)     # measured from stamps
-        run = detect_cli.detect_bag(bag=bag, make_detector=make,
-                                    spec=detect_cli.stream_spec(found, stream), streams=found)
+        run = factory.detect_bag(bag=bag, make_detector=make,
+                                 spec=factory.stream_spec(found, stream), streams=found)
         assert len(run.releases) == 1, (rate, run.releases)
         latency[rate] = run.releases[0] - trial.onset_t
     # every rate: released after the onset and soon, as at 100 Hz

@@ -24,7 +24,9 @@ from contact_detector.errors import ConfigError, ModelError
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.model import (DecisionRule, default_model_path, load_bundle, ModelBundle,
                                     runtime_versions, save_bundle)
-from contact_detector.model.bundle import card_paths, find_model, JOBLIB_PROTOCOL
+from contact_detector.model.card import card_paths
+from contact_detector.model.shipped import find_model
+from contact_detector.model.storage import JOBLIB_PROTOCOL
 import joblib
 import numpy as np
 import pytest

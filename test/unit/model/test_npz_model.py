@@ -33,10 +33,12 @@ from contact_detector.cli import convert_model
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.evaluation.metrics import frame_report
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
-from contact_detector.model.bundle import (card_paths, DecisionRule, default_model_path,
-                                           load_bundle, ModelBundle, runtime_versions,
-                                           save_bundle)
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.card import card_paths
 from contact_detector.model.forest_arrays import ForestArrays, NPZ_MEMBERS
+from contact_detector.model.rule import DecisionRule
+from contact_detector.model.shipped import default_model_path
+from contact_detector.model.storage import load_bundle, save_bundle
 import numpy as np
 import pytest
 from sklearn.ensemble import RandomForestClassifier
@@ -418,7 +420,8 @@ for name in ('sklearn', 'joblib', 'skops', 'rosbags', 'matplotlib'):
 import numpy as np
 import contact_detector.ros.node  # noqa: F401
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
-from contact_detector.model.bundle import default_model_path, load_bundle
+from contact_detector.model.shipped import default_model_path
+from contact_detector.model.storage import load_bundle
 from contact_detector.sim.trial import simulate_trial
 sys.path.insert(0, {str(REPO / 'test')!r})
 import node_support
@@ -485,7 +488,7 @@ def test_legacy_joblib_needs_sklearn_and_says_how_to_convert(tmp_path: Path,
                                                              fitted: tuple) -> None:
     path = save_bundle(bundle=_bundle(fitted[0]), path=tmp_path / 'old.joblib')
     code = ('import sys\nsys.modules["sklearn"] = None\n'
-            'from contact_detector.model.bundle import load_bundle\n'
+            'from contact_detector.model.storage import load_bundle\n'
             f'load_bundle(path={str(path)!r})\n')
     done = subprocess.run([sys.executable, '-c', code], cwd=REPO, capture_output=True,
                           text=True, timeout=60)

@@ -1,0 +1,122 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The feature, label and rule options of train and sweep (not a command).
+
+Their defaults are the shipped recipe's (:mod:`contact_detector.training.recipe`).
+"""
+
+import argparse
+
+from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA,
+                                              DEFAULT_LABELS, DEFAULT_RULE)
+
+
+def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the feature/label/rule options shared by train and sweep."""
+    d = DEFAULT_FEATURES
+    parser.add_argument('--ft-window', type=int, default=d.ft_window,
+                        help=f'F/T DFT window, samples (default {d.ft_window})')
+    parser.add_argument('--ft-hop', type=int, default=d.ft_hop,
+                        help=f'F/T feature hop, samples (default {d.ft_hop})')
+    parser.add_argument('--ft-detrend', choices=('none', 'mean'), default=d.ft_detrend,
+                        help=f"remove each F/T window's mean (default {d.ft_detrend})")
+    parser.add_argument('--ft-window-fn', choices=('rect', 'hann'), default=d.ft_window_fn)
+    for field, text in (('delta_window', 'F/T change features: newest samples averaged'),
+                        ('delta_lag', 'F/T change features: samples back to the reference'),
+                        ('baseline_window',
+                         'samples in the median baseline of the *_change features'),
+                        ('rise_frames', 'audio frames back to the reference of audio_rise_db'),
+                        ('change_max_frames',
+                         'F/T feature frames over which the *_change_max and *_shift_max '
+                         'features take the maximum'),
+                        ('shift_min_frames',
+                         'F/T feature frames over which the *_shift_min features take the '
+                         'minimum'),
+                        ('shift_lag', 'F/T samples from the newest to the end of the '
+                                      '*_shift baseline'),
+                        ('shift_window', 'F/T samples in the median baseline of *_shift')):
+        default = getattr(d, field)
+        parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
+                            help=f'{text} (default {default})')
+    parser.add_argument('--extra-features', default=None,
+                        help='comma-separated extra features, from '
+                             f"{', '.join(EXTRA_FEATURES)} (default "
+                             f"{','.join(d.extra_features)}; with --no-audio "
+                             f"{','.join(DEFAULT_FT_ONLY_EXTRA)})")
+    parser.add_argument('--no-audio', action='store_true',
+                        help='an F/T-only model (robots without a microphone): no audio '
+                             'column, one frame per F/T feature frame')
+    parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
+                        help='label window start after the onset, s')
+    parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
+                        help='label window end after the onset, s')
+    parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
+    parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
+    parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)
+    parser.add_argument('--average-frames', type=int, default=DEFAULT_RULE.average_frames,
+                        help='compare the mean P(contact) of this many frames with --threshold')
+    parser.add_argument('--sustain-frames', type=int, default=DEFAULT_RULE.sustain_frames,
+                        help='slow path: also contact when the mean P(contact) of this many '
+                             'frames >= --sustain-threshold (0 = off)')
+    parser.add_argument('--sustain-threshold', type=float,
+                        default=DEFAULT_RULE.sustain_threshold)
+    parser.add_argument('--evidence-threshold', type=float,
+                        default=DEFAULT_RULE.evidence_threshold,
+                        help='evidence path: also contact when the sum of P(contact) - '
+                             '--evidence-drift over consecutive frames reaches this (0 = off)')
+    parser.add_argument('--evidence-drift', type=float, default=DEFAULT_RULE.evidence_drift)
+
+
+def tree_counts(text: str) -> list:
+    """Parse ``1-10,20,50`` into sorted distinct tree counts (argparse type)."""
+    counts = set()
+    try:
+        for part in text.split(','):
+            low, _, high = part.strip().partition('-')
+            counts.update(range(int(low), int(high or low) + 1))
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'not a list of tree counts: {text!r}') from err
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f'tree counts must be >= 1: {text!r}')
+    return sorted(counts)
+
+
+def rule_from_args(args: argparse.Namespace) -> DecisionRule:
+    """Build the DecisionRule from parsed options."""
+    return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
+                        refractory_s=args.refractory, average_frames=args.average_frames,
+                        sustain_frames=args.sustain_frames,
+                        sustain_threshold=args.sustain_threshold,
+                        evidence_threshold=args.evidence_threshold,
+                        evidence_drift=args.evidence_drift)
+
+
+def config_from_args(args: argparse.Namespace) -> FeatureConfig:
+    """Build the FeatureConfig from parsed options."""
+    no_audio = bool(getattr(args, 'no_audio', False))
+    if args.extra_features is None:
+        extra = DEFAULT_FT_ONLY_EXTRA if no_audio else DEFAULT_FEATURES.extra_features
+    else:
+        extra = tuple(e for e in args.extra_features.split(',') if e)
+    return FeatureConfig(audio=not no_audio, ft_window=args.ft_window, ft_hop=args.ft_hop,
+                         ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
+                         delta_window=args.delta_window, delta_lag=args.delta_lag,
+                         baseline_window=args.baseline_window, rise_frames=args.rise_frames,
+                         change_max_frames=args.change_max_frames,
+                         shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
+                         shift_window=args.shift_window, extra_features=extra)

@@ -1,0 +1,124 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The decision rule a model ships with: how per-frame P(contact) becomes a contact event.
+
+The rule is data chosen on validation data together with the forest, so it is stored in the
+model card and sits in the model layer; :class:`~contact_detector.detection.release.ReleaseLogic`
+applies it.
+"""
+
+import dataclasses
+from dataclasses import dataclass
+import math
+from typing import Any, Mapping
+
+from contact_detector.errors import ConfigError
+import numpy as np
+
+
+@dataclass(frozen=True)
+class DecisionRule:
+    """
+    How per-frame probabilities become contact events (applied by the detection layer).
+
+    Attributes
+    ----------
+    threshold : float
+        Contact when P(contact) >= ``threshold``, in [0, 1].
+    confirm_frames : int
+        Consecutive frames at or above the threshold needed to report a contact, >= 1.
+    refractory_s : float
+        Seconds after a reported contact during which no new one is reported, >= 0.
+    average_frames : int
+        Frames averaged before the comparison with ``threshold``, >= 1.
+    sustain_frames, sustain_threshold : int, float
+        Slow path: contact when the mean P(contact) of the newest ``sustain_frames`` frames is
+        ``>= sustain_threshold`` (0 frames = off).
+    evidence_threshold, evidence_drift : float
+        Evidence path (a CUSUM): ``S_i = max(0, S_{i-1} + p_i - evidence_drift)`` over
+        consecutive valid frames, contact when ``S_i >= evidence_threshold`` (0 = off). A
+        forest that is only 0.6-0.9 sure for a few frames accumulates evidence, while frames
+        below ``evidence_drift`` take it away again.
+
+    """
+
+    threshold: float = 0.5
+    confirm_frames: int = 1
+    refractory_s: float = 1.0
+    average_frames: int = 1
+    sustain_frames: int = 0
+    sustain_threshold: float = 0.5
+    evidence_threshold: float = 0.0
+    evidence_drift: float = 0.5
+
+    def __post_init__(self) -> None:
+        """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
+        for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf),
+                                ('sustain_threshold', 0.0, 1.0),
+                                ('evidence_threshold', 0.0, 1000.0),
+                                ('evidence_drift', 0.0, 1.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value) or not low <= value <= high:
+                raise ConfigError(f'DecisionRule.{name} must be a finite number in '
+                                  f'[{low}, {high}], got {value!r}')
+            object.__setattr__(self, name, float(value))
+        for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < low:
+                raise ConfigError(f'DecisionRule.{name} must be an int >= {low}, got {value!r}')
+            object.__setattr__(self, name, int(value))
+
+    def describe(self) -> str:
+        """Return the rule as one line for logs and diagnostics."""
+        text = (f'threshold={self.threshold:.3f} confirm_frames={self.confirm_frames} '
+                f'refractory_s={self.refractory_s:.3f}')
+        if self.average_frames > 1:
+            text += f' average_frames={self.average_frames}'
+        if self.sustain_frames > 0:
+            text += (f' sustain_frames={self.sustain_frames} '
+                     f'sustain_threshold={self.sustain_threshold:.3f}')
+        if self.evidence_threshold > 0:
+            text += (f' evidence_threshold={self.evidence_threshold:.3f} '
+                     f'evidence_drift={self.evidence_drift:.3f}')
+        return text
+
+    def short(self) -> str:
+        """Return the rule as a table label, e.g. ``p>=0.85 x1 or mean10>=0.4``."""
+        text = f'p>={self.threshold:g} x{self.confirm_frames}'
+        if self.average_frames > 1:
+            text = f'mean{self.average_frames} ' + text
+        if self.sustain_frames > 0:
+            text += f' or mean{self.sustain_frames}>={self.sustain_threshold:g}'
+        if self.evidence_threshold > 0:
+            text += f' or sum(p-{self.evidence_drift:g})>={self.evidence_threshold:g}'
+        return text
+
+    def to_dict(self) -> dict:
+        """Plain-JSON form, stored in bundles and cards."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> 'DecisionRule':
+        """Inverse of :meth:`to_dict`; unknown keys are a :class:`ConfigError`."""
+        if not isinstance(data, Mapping):
+            raise ConfigError(f'DecisionRule must be a mapping, got {type(data).__name__}')
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ConfigError(f'unknown DecisionRule keys: {unknown} (known: {sorted(known)})')
+        return cls(**dict(data))

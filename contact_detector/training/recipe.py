@@ -1,0 +1,294 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The shipped training recipe: the defaults ``contact-detector train`` uses and its data steps.
+
+The feature configuration (:meth:`~contact_detector.features.config.FeatureConfig.shipped`),
+label window and decision rule of the shipped model, the simulated trials ``--with-sim`` adds,
+the card's record of the training data, and the event metrics of the full detector on the
+test recordings.
+"""
+
+from dataclasses import dataclass
+import json
+from pathlib import Path
+from typing import Callable, Dict, Iterable, Optional, Sequence
+
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.factory import stream_spec
+from contact_detector.detection.offline import run_detector
+from contact_detector.errors import BagError
+from contact_detector.evaluation.metrics import score_onsets, score_trial, summarize, Truth
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig, SHIFT_FEATURES
+from contact_detector.io.discovery import Streams
+from contact_detector.io.sensor_stream import load_events, StreamSpec
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.rule import DecisionRule
+from contact_detector.sim.bag_writer import write_trials
+from contact_detector.sim.trial import simulate_trials
+from contact_detector.training.protocol import LabelWindow, run_split, trial_features
+import numpy as np
+
+#: Condition sets of the simulated trials ``--with-sim`` adds.
+SIM_CONDITIONS = ('wide',)
+#: Recordings (and simulated trials) the split by recording needs: one per set at least.
+MIN_RECORDINGS = 3
+
+#: The feature configuration, labels and rule of the shipped model, chosen by
+#: leave-one-family-out (docs/generalisation.md): see :meth:`FeatureConfig.shipped`. Labels
+#: cover the first 0.3 s of the contact; release at the first frame where every tree says
+#: contact (p >= 0.95 with 10 trees; 0.9 was as safe on every left-out simulator family but
+#: released early 3 times in 48 on the real_sounds family kept out of the choice), or when the
+#: mean P(contact) of the last 15 frames reaches 0.3.
+DEFAULT_FEATURES = FeatureConfig.shipped()
+#: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
+#: do not depend on the sensor's orientation, tare or sign convention (docs/offline.md,
+#: "Robots without a microphone").
+DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES
+#: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
+NO_AUDIO_RATE = 16000
+DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
+DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
+                            sustain_frames=15, sustain_threshold=0.3)
+
+
+def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_rate: int,
+                     progress: Callable[[Iterable], Iterable] = iter) -> tuple[list, dict]:
+    """
+    Write (or reuse) ``n`` simulated trials of :data:`SIM_CONDITIONS` in ``sim_dir``.
+
+    ``progress`` wraps the iterator of trials being simulated (e.g. a progress bar).
+
+    Returns
+    -------
+    (list of Path, dict)
+        The trial bags and the manifest's settings.
+
+    Raises
+    ------
+    BagError
+        ``sim_dir`` holds other simulator output (other trials, seed or audio rate, or an F/T
+        rate more than 1 % away: one recording more or less moves the median a little).
+
+    """
+    settings = {'seed': seed, 'trials': n, 'start_index': 0,
+                'conditions': list(SIM_CONDITIONS), 'storage': 'sqlite3',
+                'audio_rate': audio_rate, 'ft_rate': ft_rate, 'chunk_size': None,
+                'label_window_s': 0.1}
+    manifest = sim_dir / 'manifest.json'
+    if manifest.exists():
+        held = json.loads(manifest.read_text())
+        have = dict(held.get('settings', {}))
+        same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
+        if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
+            raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
+                           'give an empty or new --sim-dir')
+        return [sim_dir / t['bag'] for t in held['trials']], held['settings']
+    trials = simulate_trials(n=n, seed=seed, conditions=SIM_CONDITIONS, audio_rate=audio_rate,
+                             ft_rate=ft_rate)
+    records, _ = write_trials(trials=progress(trials),
+                              out_dir=sim_dir, settings=settings)
+    return [sim_dir / r['bag'] for r in records], settings
+
+
+def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
+                     labels_path: Optional[Path], sim: Sequence[Path], sim_settings: dict,
+                     sim_dir: Optional[Path], kept: bool, manifest: dict) -> dict:
+    """Return what the model was trained on, for the model card (``training.sources``)."""
+    sources = {}
+    if user:
+        contacts = sum(len(csv_onsets[b.name]) for b in user) if csv_onsets else len(user)
+        sources['recordings'] = {
+            'count': len(user), 'contacts': contacts, 'bags': sorted(b.name for b in user),
+            'labels': f'{labels_path.name} (--labels)' if labels_path else
+            'the /contact_truth topic or the simulator manifest of each bag'}
+    if sim:
+        sources['simulated'] = {
+            'trials': len(sim),
+            'families': sorted({manifest.get(b, {}).get('condition', '') for b in sim}),
+            'seed': sim_settings['seed'], 'ft_rate': sim_settings['ft_rate'],
+            'audio_rate': sim_settings['audio_rate'],
+            'labels': 'simulator truth (/contact_truth)',
+            'kept_in': str(sim_dir) if kept else 'a temporary directory (deleted)'}
+    return sources
+
+
+def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec,
+                  audio_rate: float, wrench_rate: float, manifest: dict,
+                  found: Optional[dict] = None, labels: Optional[dict] = None) -> dict:
+    """
+    Run the full detector on held-out bags; return the event summary.
+
+    ``found`` (bag -> discovered Streams) replaces ``spec`` and the rates per bag; ``labels``
+    (bag name -> onsets) is the truth of the bags it names, every onset scored
+    (:func:`score_onsets`); other bags are scored against their manifest entry.
+    """
+    outcomes = []
+    for bag in bags:
+        streams = (found or {}).get(bag)
+        if streams is not None:
+            spec = stream_spec(streams, {})
+            audio_rate = streams.audio_rate or NO_AUDIO_RATE
+            wrench_rate = streams.wrench_rate
+        events = load_events(bag, spec=spec)
+        detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
+            audio_rate=audio_rate, wrench_rate=wrench_rate))
+        run = run_detector(events, detector=detector)
+        if bag.name in (labels or {}):
+            outcomes.extend(score_onsets(name=bag.name, condition='recordings',
+                                         onsets=labels[bag.name], events=run.events))
+            continue
+        info = manifest.get(bag)
+        if info is None:
+            continue
+        truth = Truth(name=bag.name, condition=info.get('condition', ''),
+                      onset_t=info['onset_t'], contact_end_t=info.get('contact_end_t'),
+                      impacts=tuple((i['t'], i['kind'], i['in_air'])
+                                    for i in info.get('impacts', [])))
+        outcomes.append(score_trial(truth=truth, releases=run.releases, events=run.events))
+    return summarize(outcomes)
+
+
+@dataclass
+class TrainedModel:
+    """
+    What :func:`train_model` returns.
+
+    Attributes
+    ----------
+    bundle : ModelBundle
+        The trial-split forest with its card data (training summary, metrics, rule).
+    results : dict
+        ``'sample'`` and ``'trial'`` -> :class:`~contact_detector.training.protocol.SplitResult`.
+    x : np.ndarray, shape (n_frames, n_features)
+        Every training frame (``save_bundle``'s ``check_frames``).
+    training, metrics : dict
+        The training summary and the metrics for the report; ``metrics`` also holds
+        ``events_test_trials`` (the card's copy, made with the bundle, does not).
+
+    """
+
+    bundle: ModelBundle
+    results: dict
+    x: np.ndarray
+    training: dict
+    metrics: dict
+
+
+def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
+                csv_onsets: Optional[dict], manifest: dict, sources: dict,
+                config: FeatureConfig, labels: LabelWindow, rule: DecisionRule,
+                trees: Sequence[int], seed: int, jobs: int, events: bool, created: str,
+                progress: Callable[[Iterable, str], Iterable] = lambda items, _desc: items,
+                step: Callable[[str], None] = lambda _message: None,
+                log: Callable[[str], None] = lambda _line: None) -> TrainedModel:
+    """
+    Train the contact forest the paper's way on discovered recordings and simulated trials.
+
+    Features of every bag (``jobs`` processes), the sample and the trial split
+    (:func:`~contact_detector.training.protocol.run_split`, ``n_estimators`` from ``trees``
+    by validation ROC AUC), the bundle of the trial split's forest and, with ``events``, the
+    full detector's event metrics on its test recordings.
+
+    Parameters
+    ----------
+    found : dict
+        Bag -> its discovered :class:`~contact_detector.io.discovery.Streams`; every bag trains.
+    user_bags : sequence of Path
+        The recordings among them (the rest are simulated trials, named ``sim/<name>``).
+    csv_onsets : dict or None
+        Bag name -> labelled onsets, s (``--labels``), for the recordings it names.
+    manifest : dict
+        Bag -> simulator manifest entry (:func:`~contact_detector.evaluation.truth.conditions_of`).
+    sources : dict
+        The card's ``training.sources`` (:func:`training_sources`).
+    config, labels, rule
+        Feature configuration, label window and decision rule of the model.
+    trees : sequence of int
+        Candidate ``n_estimators``.
+    seed, jobs : int
+        Random seed of the splits and forests; parallel workers.
+    events : bool
+        Run the full detector on the test recordings (``metrics['events_test_trials']``).
+    created : str
+        ISO 8601 creation time for the card (the caller reads the clock).
+    progress, step, log
+        ``progress(items, desc)`` wraps the bags of a long step, ``step(message)`` is called
+        after each forest step, ``log(line)`` receives the summary line.
+
+    Raises
+    ------
+    BagError
+        Fewer than :data:`MIN_RECORDINGS` bags.
+
+    """
+    from joblib import delayed, Parallel  # training only: scikit-learn's dependency
+
+    bags = list(found)
+    if len(bags) < MIN_RECORDINGS:
+        raise BagError(f'train splits by recording into training, validation and test sets and '
+                       f'needs at least {MIN_RECORDINGS} recordings, got {len(bags)}: add '
+                       'recordings, cut a long one into one bag per contact '
+                       '(tools/split_recording.py) or add simulated trials (--with-sim N)')
+    user = set(user_bags)
+
+    def one(bag):
+        streams = found[bag]
+        return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
+                              audio_rate=streams.audio_rate or NO_AUDIO_RATE,
+                              wrench_rate=streams.wrench_rate, label_window=labels,
+                              onsets=csv_onsets[bag.name] if csv_onsets and bag in user
+                              else None,
+                              condition=manifest.get(bag, {}).get('condition', ''))
+
+    trials = Parallel(n_jobs=jobs)(
+        delayed(one)(bag) for bag in progress(bags, 'features'))
+    x = np.concatenate([t.x for t in trials])
+    y = np.concatenate([t.y for t in trials])
+    groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
+    # Names tell the trials apart in the split: a recording and a trial may share one.
+    names = [t.name if b in user else f'sim/{t.name}' for b, t in zip(bags, trials)]
+    log(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
+    results = {}
+    for kind in ('sample', 'trial'):
+        results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
+                                  seed=seed, jobs=jobs, n_range=trees, progress=step)
+    quoted = results['trial']
+    metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
+                      'cv_accuracy_mean': r.cv_mean, 'cv_accuracy_sd': r.cv_sd,
+                      'test_auc': r.test_auc, 'test_report': r.report,
+                      'confusion_matrix': r.confusion}
+               for kind, r in results.items()}
+    training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
+                'conditions': sorted({t.condition for t in trials}),
+                'test_trials': quoted.test_trials, 'seed': seed,
+                'audio_rate': sorted({s.audio_rate for s in found.values()}),
+                'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),
+                'sources': sources}
+    bundle = ModelBundle(
+        forest=quoted.forest, feature_config=config, feature_names=config.feature_names,
+        feature_schema_version=FEATURE_SCHEMA_VERSION, label_window=labels.to_dict(),
+        decision_rule=rule,
+        versions=runtime_versions(),
+        training=training, metrics=metrics,
+        created=created)
+    if events:
+        test_bags = [b for b, n in zip(bags, names) if n in set(quoted.test_trials)]
+        metrics['events_test_trials'] = event_metrics(
+            bundle=bundle, bags=progress(test_bags, 'events'), spec=StreamSpec(),
+            audio_rate=16000.0, wrench_rate=100.0, manifest=manifest, found=found,
+            labels={b.name: csv_onsets[b.name] for b in test_bags if b in user}
+            if csv_onsets else None)
+    return TrainedModel(bundle=bundle, results=results, x=x, training=training, metrics=metrics)

@@ -1,0 +1,293 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The studies of ``contact-detector sweep``, each as markdown tables.
+
+The feature grids, the ablation, leave one family out, and the rules on a trained model.
+
+The building blocks (decoding, frames, forests, scoring a rule) are in
+:mod:`contact_detector.training.sweep`; this module holds which settings and rules each study
+compares and how its table reads.
+"""
+
+from dataclasses import replace
+from typing import Callable, Dict, Iterable, List, Optional, Sequence
+
+from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.model.bundle import ModelBundle
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
+from contact_detector.training.sweep import (best_row, compute_frames, FeatureSetting,
+                                             fit_forest, leave_one_family_out, model_rules,
+                                             rows_markdown, rule_grid, score_model,
+                                             score_over_seeds, score_rules, worst_family)
+import numpy as np
+
+#: The extra features of the first grids.
+EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
+#: The audio features measured against the tracked noise floor, and the two of round 4.
+ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
+RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
+#: The two F/T features of round 5.
+CHANGE_MAX = ('force_change_max', 'torque_change_max')
+ONSET = LabelWindow(0.0, 0.1)
+STATE = LabelWindow(0.0, 0.3)
+
+
+_SPECTRAL = ('force_centroid', 'force_spread', 'force_flux', 'torque_centroid', 'torque_spread',
+             'torque_flux')
+_SHIFT = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
+          'force_shift_max', 'torque_shift_max')
+_SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_max')
+#: The feature settings --lofo compares: name -> columns (None: the shipped model's).
+LOFO_SETTINGS = {
+    'shipped': None,
+    'round5': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
+        'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
+        'ft_change_angle', 'force_change_max', 'torque_change_max'),
+    'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
+    'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
+    'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
+    'ft-only': _SPECTRAL + _SHIFT,
+}
+
+
+def feature_grid(name: str) -> List[FeatureSetting]:
+    """Return the feature settings to try: 'compare', 'focus' or 'full' (both)."""
+    paper = FeatureConfig.paper()
+    base = FeatureConfig(ft_window=32, ft_hop=1)
+    ours = FeatureConfig(ft_detrend='mean', extra_features=EXTRAS)
+    compare = [
+        FeatureSetting('paper W160 H128, onset labels', paper, ONSET),
+        FeatureSetting('W32 H1, onset labels', base, ONSET),
+        FeatureSetting('W32 H1, state labels', base, STATE),
+        FeatureSetting('W32 H1 detrend, state labels', FeatureConfig(ft_detrend='mean'), STATE),
+        FeatureSetting('W32 H1 detrend+extras, onset labels', ours, ONSET),
+        FeatureSetting('W32 H1 detrend+extras, state labels', ours, STATE),
+    ]
+    focus = [
+        FeatureSetting('detrend+extras, state labels, delta lag 5',
+                       replace(ours, delta_lag=5), STATE),
+        FeatureSetting('detrend+extras, state labels, delta lag 3',
+                       replace(ours, delta_lag=3, delta_window=2), STATE),
+        FeatureSetting('detrend+extras, labels 0-0.2 s', ours, LabelWindow(0.0, 0.2)),
+        FeatureSetting('detrend+extras, labels 0-0.5 s', ours, LabelWindow(0.0, 0.5)),
+        FeatureSetting('W16 H1 detrend+extras, state labels', replace(ours, ft_window=16),
+                       STATE),
+        FeatureSetting('W64 H1 detrend+extras, state labels', replace(ours, ft_window=64),
+                       STATE),
+        FeatureSetting('W32 H4 detrend+extras, state labels', replace(ours, ft_hop=4), STATE),
+        FeatureSetting('audio 16 ms / 5 ms, detrend+extras, state labels',
+                       replace(ours, audio_frame_s=0.016, audio_hop_s=0.005), STATE),
+    ]
+    return {'compare': compare, 'focus': focus, 'full': compare + focus, 'none': []}[name]
+
+
+def ablation_settings() -> List[FeatureSetting]:
+    """Return the settings compared on held-out condition sets (the shipped window, W64)."""
+    full = DEFAULT_FEATURES
+    paper7 = replace(full, ft_detrend='none', extra_features=())
+    return [
+        FeatureSetting('paper 7 features, no detrend', paper7, STATE),
+        FeatureSetting('paper 7, detrend', replace(paper7, ft_detrend='mean'), STATE),
+        FeatureSetting('detrend + extras (shipped)', full, STATE),
+        FeatureSetting('shipped, without the vector shifts', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in _SHIFT)),
+        FeatureSetting('shipped, without raw audio power', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n != 'audio_power')),
+        FeatureSetting('shipped, without the *_change_max features (round 4)', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in CHANGE_MAX)),
+        FeatureSetting('shipped, without the audio onset features', full, STATE,
+                       columns=tuple(n for n in full.feature_names if n not in ONSET_AUDIO)),
+        FeatureSetting('shipped, without the dB-above-floor features', full, STATE,
+                       columns=tuple(n for n in full.feature_names
+                                     if n not in RELATIVE_AUDIO)),
+        FeatureSetting('audio only (power, dB above floor, its peak, rise and gap)', full, STATE,
+                       columns=('audio_power',) + RELATIVE_AUDIO),
+        FeatureSetting('F/T only', full, STATE,
+                       columns=tuple(n for n in full.feature_names
+                                     if not n.startswith('audio'))),
+        FeatureSetting('reduced: dB above floor, recent peak, torque centroid/spread, shifts',
+                       full, STATE,
+                       columns=('audio_power_rel_db', 'audio_peak_rel_db', 'torque_centroid',
+                                'torque_spread', 'force_shift', 'torque_shift',
+                                'force_shift_min')),
+    ]
+
+
+def lofo_rules() -> List[DecisionRule]:
+    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    rules = [DEFAULT_RULE]
+    rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
+    rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
+              for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
+    return rules
+
+
+def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
+               settings: Sequence[FeatureSetting], seeds: Optional[Sequence[int]], seed: int,
+               audio_rate: float, wrench_rate: float, jobs: int,
+               progress: Callable[[Iterable], Iterable] = iter) -> tuple:
+    """
+    Train a forest per feature setting on ``train``, score :func:`rule_grid` on ``heldout``.
+
+    With ``seeds``, one forest per seed and the counts summed
+    (:func:`~contact_detector.training.sweep.score_over_seeds`); else one forest of ``seed``.
+
+    Returns
+    -------
+    (rows, best_rows, totals)
+        Every :class:`SweepRow`, the best per setting (:func:`best_row`), and the seed sums.
+
+    """
+    rules = rule_grid()
+    rows, best_rows, totals = [], [], []
+    cache = {}
+    for setting in progress(settings):
+        key = setting.config
+        if key not in cache:
+            cache = {key: (compute_frames(events_by_trial=train, config=key,
+                                          audio_rate=audio_rate,
+                                          wrench_rate=wrench_rate, jobs=jobs),
+                           compute_frames(events_by_trial=heldout, config=key,
+                                          audio_rate=audio_rate,
+                                          wrench_rate=wrench_rate, jobs=jobs))}
+        train_frames, heldout_frames = cache[key]
+        if seeds:
+            totals += score_over_seeds(train=list(train_frames.values()),
+                                       heldout=list(heldout_frames.values()), setting=setting,
+                                       rules=rules, seeds=seeds, n_estimators=10,
+                                       jobs=jobs)
+            continue
+        forest = fit_forest(frames=list(train_frames.values()), setting=setting,
+                            n_estimators=10, seed=seed, jobs=jobs)
+        scored = score_rules(forest=forest, frames=list(heldout_frames.values()),
+                             setting=setting, rules=rules)
+        rows += scored
+        best_rows.append(best_row(scored))
+    return rows, best_rows, totals
+
+
+def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
+               trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
+               progress: Callable[[Iterable], Iterable] = iter) -> str:
+    """
+    Leave-one-family-out over the pooled trials; per setting and rule the worst family.
+
+    ``trials`` comes from :func:`~contact_detector.training.sweep.decode_bags`; ``settings``
+    are names of :data:`LOFO_SETTINGS`, column subsets of one feature configuration (the
+    shipped one with every extra feature) computed once per trial. Returns markdown.
+    """
+    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
+    frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=audio_rate,
+                                 wrench_rate=wrench_rate, jobs=jobs).values())
+    rules = lofo_rules()
+    worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
+                   'p95 [ms] | all families: detected / premature |',
+                   '|---|---|---|---|---|---|---|---|']
+    family_lines = ['| setting | rule | family | detected | premature | impact events | '
+                    'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
+    for name in progress(settings):
+        columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
+        setting = FeatureSetting(name, config, LabelWindow(0.0, label_end_s),
+                                 columns=tuple(columns))
+        folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
+                                     n_estimators=trees, seed=seed, jobs=jobs)
+        for k, rule in enumerate(rules):
+            summaries = []
+            for fold in folds:
+                s = dict(fold.rows[k].summary, family=fold.family)
+                summaries.append(s)
+                family_lines.append(f'| {name} | {rule.short()} | {fold.family} | '
+                                    f"{s['detected']}/{s['trials']} | {s['premature']} | "
+                                    f"{s['impact_events']} | {_ms(s['latency_ms_median'])} | "
+                                    f"{_ms(s['latency_ms_p95'])} |")
+            w = worst_family(summaries)
+            if w is None:
+                continue
+            total = sum(s['detected'] for s in summaries)
+            trials_n = sum(s['trials'] for s in summaries)
+            early = sum(s['premature'] for s in summaries)
+            worst_lines.append(f"| {name} | {rule.short()} | {w['family']} | "
+                               f"{w['detected']}/{w['trials']} | {w['premature']} | "
+                               f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
+                               f'{total}/{trials_n} / {early} |')
+    return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
+                      *worst_lines, '', '## Every family', '', *family_lines, ''])
+
+
+def _ms(value) -> str:
+    return '-' if value is None else f'{value:.0f}'
+
+
+def ablation_study(*, trials: Dict[str, tuple], sustain: Sequence[float], seeds: Sequence[int],
+                   audio_rate: float, wrench_rate: float, jobs: int,
+                   progress: Callable[[Iterable], Iterable] = iter) -> str:
+    """
+    Leave-one-condition-out table for :func:`ablation_settings` (the shipped rule).
+
+    For heavy, soft, noisy and gain: train on every trial of the other condition sets, score
+    on that one, with the slow-path thresholds ``sustain``, summed over ``seeds``. Returns
+    markdown.
+    """
+    everything = trials
+    rules = [replace(DEFAULT_RULE, sustain_threshold=th) for th in sustain]
+    lines = [f'Rule: {DEFAULT_RULE.short()} (slow-path thresholds '
+             f"{', '.join(str(th) for th in sustain)}); forest of 10 trees "
+             'trained on every trial of the other condition sets'
+             + (f', counts summed over seeds {seeds}, latency the median of the per-seed '
+                'medians.' if len(seeds) > 1 else '.'), '',
+             '| setting | held-out condition | slow path | detected | premature | '
+             'impact events | latency median [ms] |', '|---|---|---|---|---|---|---|']
+    cache = {}
+    for setting in progress(ablation_settings()):
+        if setting.config not in cache:
+            cache = {setting.config: compute_frames(
+                events_by_trial=everything, config=setting.config,
+                audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=jobs)}
+        frames = cache[setting.config]
+        for condition in ('heavy', 'soft', 'noisy', 'gain'):
+            fit = [f for f in frames.values() if f.truth.condition != condition]
+            test = [f for f in frames.values() if f.truth.condition == condition]
+            if not test:
+                continue
+            totals = score_over_seeds(train=fit, heldout=test, setting=setting, rules=rules,
+                                      seeds=seeds, n_estimators=10, jobs=jobs)
+            for rule, t in zip(rules, totals):
+                median = '-' if not t['medians'] else f"{np.median(t['medians']):.0f}"
+                slow = f'mean{rule.sustain_frames}>={rule.sustain_threshold}'
+                lines.append(f'| {setting.name} | {condition} | {slow} | '
+                             f"{t['detected']}/{t['trials']} | {t['premature']} | "
+                             f"{t['impact']} | {median} |")
+    return '\n'.join(lines)
+
+
+def model_study(*, bundle: ModelBundle, groups: Sequence[tuple], title: str,
+                audio_rate: float, wrench_rate: float, jobs: int) -> str:
+    """
+    Score :func:`model_rules` with a trained model on groups of trials; return markdown.
+
+    ``groups``: ``(name, trials)`` pairs, ``trials`` from :func:`decode_bags`.
+    """
+    rules = model_rules(bundle.decision_rule)
+    text = [title, '']
+    for name, trials in groups:
+        if trials:
+            text += [rows_markdown(score_model(bundle=bundle, events_by_trial=trials, name=name,
+                                               rules=rules, audio_rate=audio_rate,
+                                               wrench_rate=wrench_rate, jobs=jobs)),
+                     '']
+    return '\n'.join(text)

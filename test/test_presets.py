@@ -1,0 +1,43 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The named feature presets, the shipped models' location without ROS, and train's defaults."""
+
+from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
+from contact_detector.model.shipped import default_ft_model_path, default_model_path, model_dirs
+from contact_detector.model.storage import load_bundle
+from contact_detector.ros.model_search import node_model_dirs
+from contact_detector.training.recipe import DEFAULT_FEATURES
+
+
+def test_shipped_preset_is_the_shipped_models_configuration() -> None:
+    bundle = load_bundle(path=default_model_path())
+    assert bundle.feature_config == FeatureConfig.shipped() == DEFAULT_FEATURES
+
+
+def test_paper_preset_is_the_papers_dft_and_seven_features() -> None:
+    paper = FeatureConfig.paper()
+    assert (paper.ft_window, paper.ft_hop, paper.ft_window_fn, paper.ft_detrend) == (
+        160, 128, 'rect', 'none')
+    assert round(paper.audio_frame_s * 16000) == 512 and round(paper.audio_hop_s * 16000) == 160
+    assert paper.feature_names == PAPER_FEATURES
+    assert paper != FeatureConfig() != FeatureConfig.shipped()
+
+
+def test_shipped_models_are_found_without_ros_and_the_node_searches_the_same_places() -> None:
+    for path in (default_model_path(), default_ft_model_path()):
+        assert path.is_file() and path.parent in model_dirs()
+    assert node_model_dirs()[-len(model_dirs()):] == model_dirs()
+    assert not load_bundle(path=default_model_path()).feature_config.ft_only
+    assert load_bundle(path=default_ft_model_path()).feature_config.ft_only

@@ -1,0 +1,111 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""``contact-detector sweep --model`` and ``--seeds``: rules on a trained model, seed sums."""
+
+from contact_detector.cli import sweep as sweep_cli
+from contact_detector.cli import train as train_cli
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.rule import DecisionRule
+from contact_detector.model.storage import load_bundle
+from contact_detector.sim import simulate_trials
+from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_LABELS
+from contact_detector.training.sweep import (compute_frames, decode_bags, FeatureSetting,
+                                             fit_forest, model_rules, score_over_seeds,
+                                             score_rules)
+import pytest
+
+
+@pytest.fixture(scope='module')
+def data(tmp_path_factory):
+    root = tmp_path_factory.mktemp('sweep')
+    bags = root / 'bags'
+    trials = list(simulate_trials(n=8, seed=5, conditions=['all']))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=bags / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=bags)
+    model = root / 'm.npz'
+    assert train_cli.main([str(bags), '--no-events', '--jobs', '1', '--trees', '3',
+                           '--out', str(model)]) == 0
+    return {'bags': bags, 'model': model}
+
+
+def _table(text: str) -> list:
+    """Rows of the markdown tables in ``text`` (header and rule lines dropped)."""
+    rows = [[cell.strip() for cell in line.strip('|').split('|')]
+            for line in text.splitlines() if line.startswith('| ')]
+    return [r for r in rows if r[0] != 'setting' and not r[0].startswith('---')]
+
+
+def test_model_rules_are_scored_on_its_test_trials_and_the_folders(data, tmp_path, capsys):
+    out = tmp_path / 'rules.md'
+    assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--own-test',
+                           str(data['bags']), '--jobs', '1', '--out', str(out)]) == 0
+    bundle = load_bundle(path=data['model'])
+    rules = model_rules(bundle.decision_rule)
+    rows = _table(out.read_text())
+    own = [r for r in rows if r[0].startswith('own ')]
+    folder = [r for r in rows if r[0].startswith('bags: ')]
+    assert len(own) == len(folder) == len(rules)
+    assert [r[1] for r in own] == [rule.short() for rule in rules]
+    assert own[0][1] == bundle.decision_rule.short()
+    n_test = len(bundle.training['test_trials'])
+    assert own[0][0] == f'own {n_test} test trials'
+    assert {r[2].split('/')[1] for r in own} == {str(n_test)}
+    assert {r[2].split('/')[1] for r in folder} == {'8'}
+    # With one confirmation frame, a lower threshold fires at the same frame or sooner: it
+    # cannot detect fewer contacts plus premature releases than a higher one.
+    by_rule = {r[1]: r for r in folder}
+    fired = [int(by_rule[f'p>={t:g} x1'][2].split('/')[0]) + int(by_rule[f'p>={t:g} x1'][4])
+             for t in (0.3, 0.5, 0.7, 0.9)]
+    assert fired == sorted(fired, reverse=True)
+    capsys.readouterr()
+
+
+def test_own_test_needs_a_model(data, capsys):
+    with pytest.raises(SystemExit):
+        sweep_cli.main([str(data['bags']), '--own-test', str(data['bags'])])
+    assert '--own-test needs --model' in capsys.readouterr().err
+
+
+def test_scores_over_seeds_are_the_sums_of_one_forest_per_seed(data):
+    events = decode_bags(bags=sorted(p for p in data['bags'].iterdir() if p.is_dir()),
+                         spec=StreamSpec(), tag='t')
+    frames = list(compute_frames(events_by_trial=events, config=DEFAULT_FEATURES,
+                                 audio_rate=16000.0, wrench_rate=100.0, jobs=1).values())
+    train, heldout = frames[:5], frames[5:]
+    setting = FeatureSetting('shipped', DEFAULT_FEATURES, DEFAULT_LABELS)
+    rules = [DecisionRule(threshold=0.5), DecisionRule(threshold=0.9, confirm_frames=2)]
+    totals = score_over_seeds(train=train, heldout=heldout, setting=setting, rules=rules,
+                              seeds=[0, 1], n_estimators=3, jobs=1)
+    single = [score_rules(forest=fit_forest(frames=train, setting=setting, n_estimators=3,
+                                            seed=seed, jobs=1),
+                          frames=heldout, setting=setting, rules=rules) for seed in (0, 1)]
+    for k, total in enumerate(totals):
+        rows = [single[0][k].summary, single[1][k].summary]
+        assert total['rule'] == rules[k].short()
+        assert total['trials'] == 2 * len(heldout)
+        assert total['detected'] == sum(s['detected'] for s in rows)
+        assert total['premature'] == sum(s['premature'] for s in rows)
+        assert total['miss'] == sum(s['missed'] + s['late'] for s in rows)
+        assert total['medians'] == [s['latency_ms_median'] for s in rows
+                                    if s['latency_ms_median'] is not None]
+
+
+def test_seed_list_option(capsys):
+    assert sweep_cli.seed_list('0,1, 3') == [0, 1, 3]
+    with pytest.raises(SystemExit):
+        sweep_cli.main(['a', 'b', '--seeds', 'x'])
+    assert 'not a list of seeds' in capsys.readouterr().err
