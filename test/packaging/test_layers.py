@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 PACKAGE = REPO / 'contact_detector'
 
 #: The layers, bottom first. ``errors`` (and the package's ``__init__``) sit below them all.

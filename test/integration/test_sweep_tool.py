@@ -27,6 +27,8 @@ from contact_detector.training.sweep import (compute_frames, decode_bags, Featur
                                              score_rules)
 import pytest
 
+pytestmark = pytest.mark.slow   # simulates bags and trains forests
+
 
 @pytest.fixture(scope='module')
 def data(tmp_path_factory):
