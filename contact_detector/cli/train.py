@@ -48,6 +48,7 @@ from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VER
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
+from contact_detector.model.augmentation import trial_seed, WrenchAugmentation
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
                                            save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
@@ -318,6 +319,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              'numpy alone, docs/model.md)')
     parser.add_argument('--jobs', type=int, default=1, help='parallel workers')
     parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--augment', action='store_true',
+                        help='vary each trial\'s wrench before its features: lever arms '
+                             '(torque x 1/3..3) and, for half the trials, a sensor tared at '
+                             'rest (docs/model.md); drawn from --seed and the bag name')
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
@@ -443,6 +448,8 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     manifest = conditions_of(bags)
     user = set(user_bags)
 
+    augmentation = WrenchAugmentation() if args.augment else None
+
     def one(bag):
         streams = found[bag]
         return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
@@ -450,7 +457,9 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
                               wrench_rate=streams.wrench_rate, label_window=labels,
                               onsets=csv_onsets[bag.name] if csv_onsets and bag in user
                               else None,
-                              condition=manifest.get(bag, {}).get('condition', ''))
+                              condition=manifest.get(bag, {}).get('condition', ''),
+                              augmentation=augmentation,
+                              augment_seed=trial_seed(seed=args.seed, name=bag.name))
 
     trials = Parallel(n_jobs=args.jobs)(
         delayed(one)(bag) for bag in tqdm(bags, desc='features', unit='bag'))
@@ -475,6 +484,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
                 'conditions': sorted({t.condition for t in trials}),
                 'test_trials': quoted.test_trials, 'seed': args.seed,
+                'augmentation': augmentation.to_dict() if augmentation else None,
                 'audio_rate': sorted({s.audio_rate for s in found.values()}),
                 'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),
                 'sources': training_sources(user=user_bags, csv_onsets=csv_onsets,
