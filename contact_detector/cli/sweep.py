@@ -49,6 +49,7 @@ from contact_detector.errors import ContactDetectorError
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
+from contact_detector.training.augmentation import AUGMENTED, scale_range, WrenchAugmentation
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE)
@@ -93,8 +94,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo', action='store_true',
                         help='leave-one-family-out: pool the folders, leave each family out')
     parser.add_argument('--lofo-settings', default=','.join(LOFO_SETTINGS),
-                        help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)})')
+                        help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)}'
+                             f'; NAME{AUGMENTED}: the forests train on augmented wrenches, '
+                             'see --augment-tare; the left-out family is never augmented)')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability,
+                        help='augmentation: probability of a tared sensor (default '
+                             f'{WrenchAugmentation.tare_probability})')
+    parser.add_argument('--augment-torque', type=scale_range,
+                        default=WrenchAugmentation.torque_scale,
+                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
+                             '(default 1/3,3)')
     parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
                         help='--lofo: frames up to this long after the onset are labelled '
                              f'contact, s (default {STATE.end_s})')
@@ -133,11 +144,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             args.out.write_text(output)
         return 0
     if args.lofo:
+        try:
+            augmentation = WrenchAugmentation(tare_probability=args.augment_tare,
+                                              torque_scale=tuple(args.augment_torque))
+        except ContactDetectorError as err:
+            parser.error(str(err))
         trials = {}
         for i, folder in enumerate(args.bags):
             trials.update(decode(find_bags([folder]), spec, f'{i}'))
         output = lofo_study(trials=trials, settings=args.lofo_settings.split(','),
                             label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
+                            augmentation=augmentation,
                             audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
                             jobs=args.jobs,
                             progress=lambda items: tqdm(items, desc='lofo', unit='setting'))

@@ -34,6 +34,7 @@ from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
+from contact_detector.training.augmentation import augment_events, WrenchAugmentation
 import numpy as np
 
 SPLIT = (0.56, 0.19, 0.25)
@@ -70,7 +71,9 @@ class TrialData:
 
 def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_rate: float,
                    wrench_rate: float, label_window: LabelWindow,
-                   onsets: Optional[List[float]] = None, condition: str = '') -> TrialData:
+                   onsets: Optional[List[float]] = None, condition: str = '',
+                   augmentation: Optional[WrenchAugmentation] = None,
+                   augment_seed: Sequence[int] = (0,)) -> TrialData:
     """
     Compute the labelled feature frames of one bag.
 
@@ -90,6 +93,10 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
         True onsets (s); None = from the bag's truth topic.
     condition : str
         Condition label for reports.
+    augmentation : WrenchAugmentation or None
+        Vary the wrench before the features (:mod:`.augmentation`); None = as recorded.
+    augment_seed : sequence of int
+        Entropy of the augmentation draw.
 
     Returns
     -------
@@ -97,6 +104,8 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
 
     """
     events = load_events(bag, spec=spec)
+    if augmentation is not None:
+        events = augment_events(events, augmentation=augmentation, seed=augment_seed)
     if onsets is None:
         onsets = [start for start, _ in truth_onsets(events)]
         if not onsets:

@@ -38,6 +38,7 @@ from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.rule import DecisionRule
 from contact_detector.sim.bag_writer import write_trials
 from contact_detector.sim.trial import simulate_trials
+from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow, run_split, trial_features
 import numpy as np
 
@@ -191,6 +192,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 csv_onsets: Optional[dict], manifest: dict, sources: dict,
                 config: FeatureConfig, labels: LabelWindow, rule: DecisionRule,
                 trees: Sequence[int], seed: int, jobs: int, events: bool, created: str,
+                augmentation: Optional[WrenchAugmentation] = None,
                 progress: Callable[[Iterable, str], Iterable] = lambda items, _desc: items,
                 step: Callable[[str], None] = lambda _message: None,
                 log: Callable[[str], None] = lambda _line: None) -> TrainedModel:
@@ -224,6 +226,10 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         Run the full detector on the test recordings (``metrics['events_test_trials']``).
     created : str
         ISO 8601 creation time for the card (the caller reads the clock).
+    augmentation : WrenchAugmentation or None
+        Vary each bag's wrench before its features, drawn from ``seed`` and the bag's name
+        (:mod:`~contact_detector.training.augmentation`); None = as recorded. The card
+        records it under ``training.augmentation``.
     progress, step, log
         ``progress(items, desc)`` wraps the bags of a long step, ``step(message)`` is called
         after each forest step, ``log(line)`` receives the summary line.
@@ -251,7 +257,9 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                               wrench_rate=streams.wrench_rate, label_window=labels,
                               onsets=csv_onsets[bag.name] if csv_onsets and bag in user
                               else None,
-                              condition=manifest.get(bag, {}).get('condition', ''))
+                              condition=manifest.get(bag, {}).get('condition', ''),
+                              augmentation=augmentation,
+                              augment_seed=trial_seed(seed=seed, name=bag.name))
 
     trials = Parallel(n_jobs=jobs)(
         delayed(one)(bag) for bag in progress(bags, 'features'))
@@ -274,6 +282,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
                 'conditions': sorted({t.condition for t in trials}),
                 'test_trials': quoted.test_trials, 'seed': seed,
+                'augmentation': augmentation.to_dict() if augmentation else None,
                 'audio_rate': sorted({s.audio_rate for s in found.values()}),
                 'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),
                 'sources': sources}

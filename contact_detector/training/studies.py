@@ -28,6 +28,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
+from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.training.sweep import (best_row, compute_frames, FeatureSetting,
@@ -183,17 +184,27 @@ def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
 
 def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
+               augmentation: WrenchAugmentation = WrenchAugmentation(),
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
     Leave-one-family-out over the pooled trials; per setting and rule the worst family.
 
     ``trials`` comes from :func:`~contact_detector.training.sweep.decode_bags`; ``settings``
     are names of :data:`LOFO_SETTINGS`, column subsets of one feature configuration (the
-    shipped one with every extra feature) computed once per trial. Returns markdown.
+    shipped one with every extra feature) computed once per trial. A name ending in
+    :data:`~contact_detector.training.augmentation.AUGMENTED` (``shipped+aug``) trains the
+    forests on the same trials with their wrenches varied by ``augmentation`` (drawn from
+    ``seed`` and each trial's name); the left-out family is never augmented. Returns markdown.
     """
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
     frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=audio_rate,
                                  wrench_rate=wrench_rate, jobs=jobs).values())
+    fit_frames = None
+    if any(name.endswith(AUGMENTED) for name in settings):
+        fit_frames = list(compute_frames(
+            events_by_trial=trials, config=config, audio_rate=audio_rate,
+            wrench_rate=wrench_rate, jobs=jobs, augmentation=augmentation,
+            seed=seed).values())
     rules = lofo_rules()
     worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
                    'p95 [ms] | all families: detected / premature |',
@@ -201,11 +212,14 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     family_lines = ['| setting | rule | family | detected | premature | impact events | '
                     'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
     for name in progress(settings):
-        columns = LOFO_SETTINGS[name] or DEFAULT_FEATURES.feature_names
+        augmented = name.endswith(AUGMENTED)
+        columns = (LOFO_SETTINGS[name.removesuffix(AUGMENTED)]
+                   or DEFAULT_FEATURES.feature_names)
         setting = FeatureSetting(name, config, LabelWindow(0.0, label_end_s),
                                  columns=tuple(columns))
         folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
-                                     n_estimators=trees, seed=seed, jobs=jobs)
+                                     n_estimators=trees, seed=seed, jobs=jobs,
+                                     fit_frames=fit_frames if augmented else None)
         for k, rule in enumerate(rules):
             summaries = []
             for fold in folds:

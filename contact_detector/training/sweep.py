@@ -36,6 +36,7 @@ from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.rule import DecisionRule
+from contact_detector.training.augmentation import augment_events, trial_seed, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from joblib import delayed, Parallel
 import numpy as np
@@ -132,8 +133,11 @@ def score_model(*, bundle: ModelBundle, events_by_trial: Dict[str, tuple], name:
 
 
 def trial_frames(*, events, truth: Truth, config: FeatureConfig, audio_rate: float,
-                 wrench_rate: float) -> TrialFrames:
-    """Compute one trial's valid feature frames with the streaming core."""
+                 wrench_rate: float, augmentation: Optional[WrenchAugmentation] = None,
+                 augment_seed: Sequence[int] = (0,)) -> TrialFrames:
+    """Compute one trial's valid feature frames with the streaming core (optionally augmented)."""
+    if augmentation is not None:
+        events = augment_events(events, augmentation=augmentation, seed=augment_seed)
     extractor = StreamingFeatureExtractor(config=config, audio_rate=audio_rate,
                                           ft_input_rate=wrench_rate)
     frames = run_features(events, extractor=extractor)
@@ -142,12 +146,21 @@ def trial_frames(*, events, truth: Truth, config: FeatureConfig, audio_rate: flo
 
 
 def compute_frames(*, events_by_trial: Dict[str, tuple], config: FeatureConfig,
-                   audio_rate: float, wrench_rate: float, jobs: int) -> Dict[str, TrialFrames]:
-    """Feature frames of every trial; ``events_by_trial`` maps name -> (events, truth)."""
+                   audio_rate: float, wrench_rate: float, jobs: int,
+                   augmentation: Optional[WrenchAugmentation] = None,
+                   seed: int = 0) -> Dict[str, TrialFrames]:
+    """
+    Feature frames of every trial; ``events_by_trial`` maps name -> (events, truth).
+
+    With ``augmentation``, each trial's wrench is varied first, drawn from
+    ``trial_seed(seed=seed, name=name)`` (:mod:`contact_detector.training.augmentation`).
+    """
     names = sorted(events_by_trial)
     frames = Parallel(n_jobs=jobs)(
         delayed(trial_frames)(events=events_by_trial[n][0], truth=events_by_trial[n][1],
-                              config=config, audio_rate=audio_rate, wrench_rate=wrench_rate)
+                              config=config, audio_rate=audio_rate, wrench_rate=wrench_rate,
+                              augmentation=augmentation,
+                              augment_seed=trial_seed(seed=seed, name=n))
         for n in names)
     return dict(zip(names, frames))
 
@@ -302,7 +315,8 @@ class FamilyRow:
 
 def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetting,
                          rules: Sequence[DecisionRule], n_estimators: int, seed: int,
-                         jobs: int, families: Optional[Sequence[str]] = None
+                         jobs: int, families: Optional[Sequence[str]] = None,
+                         fit_frames: Optional[Sequence[TrialFrames]] = None
                          ) -> List[FamilyRow]:
     """
     Train on all families but one, score every rule on the one left out; once per family.
@@ -324,6 +338,10 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
         The forest (as :func:`fit_forest`).
     families : sequence of str, optional
         The families to leave out in turn (default: every family present).
+    fit_frames : sequence of TrialFrames, optional
+        The frames the forests are trained on (e.g. the same trials augmented), grouped by
+        the same families; default ``frames``. The left-out family is always scored on
+        ``frames``.
 
     Returns
     -------
@@ -335,7 +353,8 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
     out = []
     for family in (families or present):
         test = [f for f in frames if f.truth.condition == family]
-        fit = [f for f in frames if f.truth.condition != family]
+        fit = [f for f in (frames if fit_frames is None else fit_frames)
+               if f.truth.condition != family]
         if not test or not fit:
             continue
         forest = fit_forest(frames=fit, setting=setting, n_estimators=n_estimators, seed=seed,

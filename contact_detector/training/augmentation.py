@@ -1,0 +1,191 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Training-time augmentation of a recording's wrench: other lever arms, a tared sensor.
+
+A trial recorded (or simulated) with one robot stands for others only where its features do
+not encode that robot. Two differences between wrist sensors are exact linear maps of the
+wrench a trial already has, so they can be applied to any trial before its features are
+computed, instead of simulating every family again:
+
+- **Lever arms.** Every torque the sensor sees is ``T = r x F`` summed over the loads; moving
+  every load point ``s`` times farther from the sensor gives ``T' = s T``. The scale is drawn
+  log-uniformly from ``torque_scale`` per trial, so the torque per newton of contact force
+  varies by ``torque_scale[1] / torque_scale[0]``.
+- **A tared sensor.** A sensor zeroed while it holds the object reads ``W - mean(W)`` over the
+  tare window, so the carried load reads about zero and a contact *raises* ``|F|`` instead of
+  lowering it. The tare is drawn per trial with probability ``tare_probability``, over
+  ``tare_window_s`` after the first wrench sample (the robot at rest holding the object: the
+  simulator's trials rest for at least 1 s before the lift).
+
+Rotating the sensor frame is not drawn: every F/T feature is a function of vector norms or
+of differences of vectors (docs/features.md), which a rotation leaves unchanged.
+
+The audio, the truth and the stamps are passed through untouched; the draw depends only on
+``seed``, so a trial gets the same augmentation in every run.
+"""
+
+from dataclasses import dataclass, replace
+import math
+from typing import List, Sequence, Tuple
+import zlib
+
+from contact_detector.errors import ConfigError
+from contact_detector.io.sensor_stream import Event, WrenchEvent
+import numpy as np
+
+
+#: Suffix of a ``sweep --lofo`` setting whose forests train on augmented wrenches.
+AUGMENTED = '+aug'
+
+
+@dataclass(frozen=True)
+class WrenchAugmentation:
+    """
+    How the wrench of a training trial is varied (see the module docstring).
+
+    Attributes
+    ----------
+    tare_probability : float
+        Probability, in [0, 1], that a trial is read as from a sensor tared at rest.
+    tare_window_s : tuple of float
+        (start, end) of the tare window in s after the first wrench sample, ``0 <= start < end``.
+    torque_scale : tuple of float
+        (low, high) of the log-uniform torque scale ``s``, ``0 < low <= high``.
+
+    """
+
+    tare_probability: float = 0.5
+    tare_window_s: Tuple[float, float] = (0.2, 0.6)
+    torque_scale: Tuple[float, float] = (1.0 / 3.0, 3.0)
+
+    def __post_init__(self) -> None:
+        """Validate the ranges (raises ConfigError)."""
+        try:
+            p = float(self.tare_probability)
+            w0, w1 = (float(v) for v in self.tare_window_s)
+            lo, hi = (float(v) for v in self.torque_scale)
+        except (TypeError, ValueError) as err:
+            raise ConfigError(f'WrenchAugmentation: not numbers: {self}') from err
+        if not 0.0 <= p <= 1.0:
+            raise ConfigError(f'tare_probability must be in [0, 1], got {p}')
+        if not 0.0 <= w0 < w1:
+            raise ConfigError(f'tare_window_s must be 0 <= start < end, got {self.tare_window_s}')
+        if not 0.0 < lo <= hi or not math.isfinite(hi):
+            raise ConfigError(f'torque_scale must be 0 < low <= high, got {self.torque_scale}')
+
+    def to_dict(self) -> dict:
+        """Return the settings as a JSON-ready dict (for the model card)."""
+        return {'tare_probability': self.tare_probability,
+                'tare_window_s': list(self.tare_window_s),
+                'torque_scale': list(self.torque_scale)}
+
+
+@dataclass(frozen=True)
+class WrenchDraw:
+    """One trial's draw: the torque scale and whether the sensor is tared."""
+
+    torque_scale: float
+    tared: bool
+
+
+def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw:
+    """
+    Draw one trial's augmentation.
+
+    Parameters
+    ----------
+    augmentation : WrenchAugmentation
+        The ranges.
+    seed : sequence of int
+        Entropy of the draw (e.g. ``[run_seed, crc32(trial_name)]``).
+
+    Returns
+    -------
+    WrenchDraw
+        ``s = exp(U(log low, log high))``, ``tared ~ Bernoulli(tare_probability)``.
+
+    """
+    rng = np.random.default_rng(list(seed))
+    lo, hi = augmentation.torque_scale
+    scale = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    tared = bool(rng.uniform() < augmentation.tare_probability)
+    return WrenchDraw(torque_scale=scale, tared=tared)
+
+
+def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
+                   seed: Sequence[int]) -> List[Event]:
+    """
+    Return the events with the wrench of one drawn augmentation.
+
+    ``F' = F - tared * mean_w(F)`` and ``T' = s T - tared * mean_w(s T)``, where ``mean_w`` is
+    the mean over the samples stamped in the tare window (``tare_window_s`` after the first
+    wrench stamp). If the recording has no sample in that window, the tare is skipped (the
+    scale still applies).
+
+    Parameters
+    ----------
+    events : sequence of Event
+        One recording's events (:func:`contact_detector.io.sensor_stream.load_events`).
+    augmentation : WrenchAugmentation
+        The ranges.
+    seed : sequence of int
+        Entropy of the draw (:func:`draw`).
+
+    Returns
+    -------
+    list of Event
+        The same events, wrench events replaced; shapes and stamps unchanged.
+
+    """
+    choice = draw(augmentation=augmentation, seed=seed)
+    wrenches = [e for e in events if isinstance(e, WrenchEvent)]
+    bias_f = np.zeros(3)
+    bias_t = np.zeros(3)
+    if choice.tared and wrenches:
+        t = np.concatenate([e.t for e in wrenches])
+        w0, w1 = augmentation.tare_window_s
+        first = float(t.min()) if t.size else 0.0
+        keep = (t >= first + w0) & (t < first + w1)
+        if keep.any():
+            bias_f = np.concatenate([e.force for e in wrenches])[keep].mean(axis=0)
+            bias_t = (choice.torque_scale
+                      * np.concatenate([e.torque for e in wrenches])[keep].mean(axis=0))
+    out: List[Event] = []
+    for e in events:
+        if isinstance(e, WrenchEvent):
+            e = replace(e, force=e.force - bias_f,
+                        torque=choice.torque_scale * e.torque - bias_t)
+        out.append(e)
+    return out
+
+
+def trial_seed(*, seed: int, name: str) -> Tuple[int, int]:
+    """Return the draw's entropy for one trial: the run's seed and a CRC-32 of its name."""
+    return (int(seed), zlib.crc32(name.encode('utf-8')))
+
+
+def scale_range(text: str) -> Tuple[float, float]:
+    """
+    Parse a torque-scale range written ``LOW,HIGH`` (e.g. ``0.5,2``).
+
+    Raises
+    ------
+    ValueError
+        If it is not two numbers (argparse turns this into a usage error).
+
+    """
+    low, high = (float(v) for v in text.split(','))
+    return low, high
