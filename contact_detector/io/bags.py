@@ -235,7 +235,7 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
         try:
             # The plain reader: AnyReader's typestore set-up costs ~30 ms per bag, and the
             # fast decoders do not need it. It is opened only if a message needs rosbags.
-            reader = stack.enter_context(Ros1Reader(path) if is1 else Reader(path))
+            reader = stack.enter_context(_plain_reader(path, fast=bool(decoders)))
         except Exception as err:  # rosbags raises several unrelated types for bad bags
             problem = f'it does not open ({_first_line(err)})'
         if problem is None:
@@ -254,11 +254,19 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
 
             try:
                 for conn, log_ns, raw in reader.messages(connections=conns):
-                    msg = _decode(path, raw, conn.topic, conn.msgtype, decoders=decoders,
-                                  slow=slow, known=known, bad=bad)
-                    if msg is not None:
-                        seen.add(conn.topic, int(log_ns))
-                        yield BagMessage(conn.topic, conn.msgtype, int(log_ns), msg)
+                    decode = decoders.get(conn.msgtype)     # inline: the per-message path
+                    try:
+                        msg = None if decode is None else decode(raw)
+                    except Exception:  # a fast reader tripped on damaged bytes: rosbags judges
+                        msg = None
+                    if msg is None:
+                        msg = _decode(path, raw, conn.topic, conn.msgtype, decoders={},
+                                      slow=slow, known=known, bad=bad)
+                        if msg is None:
+                            continue
+                    log_ns = int(log_ns)
+                    seen.add(conn.topic, log_ns)
+                    yield BagMessage(conn.topic, conn.msgtype, log_ns, msg)
             except BagError:
                 raise
             except Exception as err:  # the bag is damaged past the messages read so far
@@ -278,6 +286,36 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
         counts = ', '.join(f'{n} on {topic}' for topic, n in sorted(bad.items()))
         _warn_once(f'damaged bag {path}: skipped {sum(bad.values())} messages whose bytes do '
                    f'not deserialise ({counts})')
+
+
+def _metadata(path: Path) -> dict | None:
+    """Read a rosbag2 directory's ``metadata.yaml`` with libyaml (None if it does not read)."""
+    try:
+        import yaml
+        loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+        return yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
+                         Loader=loader)['rosbag2_bagfile_information']
+    except Exception:  # missing or broken: the callers let rosbags (or salvage) read the bag
+        return None
+
+
+def _plain_reader(path: Path, *, fast: bool) -> Any:
+    """
+    Return the storage reader of ``iter_messages``: rosbags' ROS 1 or rosbag2 reader.
+
+    With ``fast`` (the offline tools' decoders), a single uncompressed sqlite3 file is read by
+    :class:`contact_detector.io.salvage.Sqlite3Reader`, which skips rosbags' counting scans.
+    """
+    if is_ros1_bag(path):
+        return Ros1Reader(path)
+    info = _metadata(path) if fast else None
+    if info is not None and info.get('storage_identifier') == 'sqlite3' \
+            and not info.get('compression_format') \
+            and len(info.get('relative_file_paths') or ()) == 1:
+        file = path / info['relative_file_paths'][0]
+        if file.is_file():
+            return salvage.Sqlite3Reader(file)
+    return Reader(path)
 
 
 class _Seen:
@@ -327,9 +365,7 @@ def _decode(path: Path, raw: bytes, topic: str, msgtype: str, *,
 def _expected_count(path: Path) -> int | None:
     """Message count that ``metadata.yaml`` gives, if it reads."""
     try:
-        import yaml
-        info = yaml.safe_load((path / 'metadata.yaml').read_text(encoding='utf-8'))
-        return int(info['rosbag2_bagfile_information']['message_count'])
+        return int(_metadata(path)['message_count'])
     except Exception:  # missing or broken: unknown
         return None
 
@@ -431,12 +467,8 @@ def topic_types(path: Path) -> dict[str, str]:
     if is_bag_dir(path):
         # metadata.yaml with libyaml: rosbags' reader parses it with ruamel (~50 ms a bag)
         try:
-            import yaml
-            loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
-            info = yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
-                             Loader=loader)['rosbag2_bagfile_information']
             return {t['topic_metadata']['name']: t['topic_metadata']['type']
-                    for t in info['topics_with_message_count']}
+                    for t in _metadata(path)['topics_with_message_count']}
         except Exception:  # anything unusual: let rosbags read it (and report the problem)
             pass
     try:

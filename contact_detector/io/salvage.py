@@ -30,6 +30,9 @@ most of its messages, and this module scans the bytes for them:
 * rosbag2 directories without a readable ``metadata.yaml``: the storage files (``*.db3``,
   ``*.mcap``) describe their own topics and types.
 
+:class:`Sqlite3Reader` reads an intact sqlite3 file the same way (the same topic query), in
+log-time order: the offline tools' fast path.
+
 :func:`salvage` returns the messages found, in log-time order, what was lost (counted where the
 bag says how many messages it had), and deserialisers built from the definitions the bag
 stores. :func:`contact_detector.io.bags.iter_messages` falls back to it when a bag does not
@@ -43,7 +46,7 @@ import shutil
 import sqlite3
 import struct
 import tempfile
-from typing import Any, Optional
+from typing import Any, Iterator, NamedTuple, Optional
 from urllib.parse import quote
 
 from contact_detector.errors import BagError
@@ -433,33 +436,98 @@ def _sqlite(file: Path, out: Salvaged) -> None:
     _sqlite_read(file, file.name, out)
 
 
-def _sqlite_read(file: Path, name: str, out: Salvaged) -> None:
-    uri = f'file:{quote(str(file.resolve()))}?immutable=1'
+def _sqlite_connect(file: Path) -> sqlite3.Connection:
+    """Open a rosbag2 sqlite3 file read-only (immutable: no locks, no journal)."""
+    return sqlite3.connect(f'file:{quote(str(file.resolve()))}?immutable=1', uri=True)
+
+
+def _sqlite_conns(con: sqlite3.Connection, name: str) -> dict:
+    """Topics of a rosbag2 sqlite3 file: ``(name, topic id)`` -> :class:`Conn`."""
+    rows = con.execute('SELECT id, name, type FROM topics').fetchall()
+    defs = {}
     try:
-        con = sqlite3.connect(uri, uri=True)
+        for typ, enc, text in con.execute(
+                'SELECT topic_type, encoding, encoded_message_definition '
+                'FROM message_definitions'):
+            defs[typ] = ({'ros2msg': 'msg', 'ros2idl': 'idl'}.get(enc, ''), text)
+    except sqlite3.Error:
+        pass                                # older schema (or damaged): Jazzy's types
+    out = {}
+    for tid, topic, typ in rows:
+        fmt, text = defs.get(typ, ('', ''))
+        out[(name, tid)] = Conn(topic=topic, msgtype=typ, msgdef=text, fmt=fmt)
+    return out
+
+
+def _sqlite_read(file: Path, name: str, out: Salvaged) -> None:
+    try:
+        con = _sqlite_connect(file)
     except sqlite3.Error as err:
         out.problems.append(f'{name} does not open ({err})')
         return
     try:
         try:
-            rows = con.execute('SELECT id, name, type FROM topics').fetchall()
+            out.conns.update(_sqlite_conns(con, name))
         except sqlite3.Error as err:
             out.problems.append(f'{name}: its topics table does not read ({err})')
             return
-        defs = {}
-        try:
-            for typ, enc, text in con.execute(
-                    'SELECT topic_type, encoding, encoded_message_definition '
-                    'FROM message_definitions'):
-                defs[typ] = ({'ros2msg': 'msg', 'ros2idl': 'idl'}.get(enc, ''), text)
-        except sqlite3.Error:
-            pass                            # older schema (or damaged): Jazzy's types
-        for tid, topic, typ in rows:
-            fmt, text = defs.get(typ, ('', ''))
-            out.conns[(name, tid)] = Conn(topic=topic, msgtype=typ, msgdef=text, fmt=fmt)
         _sqlite_messages(con, name, out)
     finally:
         con.close()
+
+
+class SqliteConnection(NamedTuple):
+    """A topic of :class:`Sqlite3Reader`: its id in the file, name and type."""
+
+    tid: int
+    topic: str
+    msgtype: str
+
+
+class Sqlite3Reader:
+    """
+    Reader of an intact single-file rosbag2 sqlite3 bag, for the offline tools' fast path.
+
+    Use as ``with Sqlite3Reader(file) as reader``; ``reader.connections`` lists the topics and
+    ``reader.messages(connections=...)`` yields ``(connection, log time ns, CDR bytes)`` in
+    log-time order (``ORDER BY timestamp``, the query rosbags runs). Unlike rosbags' reader it
+    does not count the messages per topic on opening (two scans of the whole table, a quarter
+    of the time of decoding a 44.1 kHz bag). The connections come from the same query as
+    :func:`salvage`'s; a file that does not read raises :class:`sqlite3.Error` (the caller
+    falls back to :func:`salvage`).
+    """
+
+    def __init__(self, file: Path) -> None:
+        self.file = Path(file)
+        self.connections: list[SqliteConnection] = []
+        self._con: Optional[sqlite3.Connection] = None
+
+    def __enter__(self) -> 'Sqlite3Reader':
+        """Open the file and read its topics."""
+        self._con = _sqlite_connect(self.file)
+        try:
+            conns = _sqlite_conns(self._con, self.file.name)
+        except BaseException:
+            self._con.close()
+            raise
+        self.connections = [SqliteConnection(key[1], c.topic, c.msgtype)
+                            for key, c in conns.items()]
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        """Close the file."""
+        if self._con is not None:
+            self._con.close()
+            self._con = None
+
+    def messages(self, *, connections: list) -> Iterator[tuple]:
+        """Yield ``(connection, log time ns, bytes)`` of these connections in log-time order."""
+        cmap = {c.tid: c for c in connections}
+        marks = ','.join('?' * len(cmap))
+        cur = self._con.execute(f'SELECT topic_id, timestamp, data FROM messages WHERE '
+                                f'topic_id IN ({marks}) ORDER BY timestamp', list(cmap))
+        for tid, log_ns, data in cur:
+            yield cmap[tid], log_ns, data
 
 
 def _sqlite_messages(con: sqlite3.Connection, name: str, out: Salvaged) -> None:
