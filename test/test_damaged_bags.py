@@ -149,6 +149,9 @@ def test_a_missing_or_broken_metadata_yaml(trial, tmp_path, caplog, storage, dam
     else:
         meta.write_text(meta.read_text()[:120])
     assert find_bags([bag.parent]) == [bag]     # still a bag: it has its storage file
+    # a folder of bags with a stray storage file stays a folder of bags
+    (bag.parent / 'stray.mcap').write_bytes(b'')
+    assert find_bags([bag.parent]) == [bag]
     with caplog.at_level(logging.WARNING):
         assert topic_types(bag) == TOPICS
         assert _keys(bag) == intact

@@ -85,12 +85,15 @@ def is_bag_dir(path: Path) -> bool:
     Return True if ``path`` is a rosbag2 directory.
 
     That is a directory holding ``metadata.yaml``, or (its ``metadata.yaml`` lost) storage
-    files (``*.db3``, ``*.mcap``).
+    files (``*.db3``, ``*.mcap``) and no subdirectory (a folder of bags is not a bag).
     """
     if not path.is_dir():
         return False
-    return (path / 'metadata.yaml').is_file() or any(
-        p.suffix in ('.db3', '.mcap') and p.is_file() for p in path.iterdir())
+    if (path / 'metadata.yaml').is_file():
+        return True
+    entries = list(path.iterdir())
+    return not any(p.is_dir() for p in entries) and any(
+        p.suffix in ('.db3', '.mcap') and p.is_file() for p in entries)
 
 
 def is_ros1_bag(path: Path) -> bool:
