@@ -57,9 +57,10 @@ def main() -> int:
             command('simulate', str(out), '--trials', str(args.trials), '--seed',
                     str(args.seed), '--ft-rate', str(args.ft_rate), '--quiet',
                     '--conditions', *args.conditions)
-        command('label', str(out), '--out', str(out / 'labels.csv'))
+        # the labels go to the temporary directory: --dir may be shared, read-only data
+        command('label', str(out), '--out', str(Path(tmp) / 'labels.csv'))
         trials = json.loads((out / 'manifest.json').read_text())['trials']
-        with open(out / 'labels.csv') as handle:
+        with open(Path(tmp) / 'labels.csv') as handle:
             rows = {r['bag']: r for r in csv.DictReader(handle)}
     by_family: dict[str, list[float]] = {}
     for trial in trials:

@@ -59,7 +59,12 @@ which must decide causally, this sees the whole recording and works in three ste
    time (audio has sample resolution); the sound's travel time from the hand to the
    microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
    which are found late rather than early, the window starts at ``audio_slow_lo_s``; after
-   a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``.
+   a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``. Without a sound
+   in that window, a strong one (``audio_strong`` times the floor, +15 dB) in
+   ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its
+   baseline before the contact (a push on the object, a brush, the approach's deceleration),
+   and a loud impact just after is the contact, which the F/T step alone would put tens of
+   ms early.
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
@@ -129,6 +134,12 @@ class LabelSettings:
         audio_rise``.
     audio_k : float
         Sample threshold in robust noise standard deviations for the sound's first sample.
+    audio_strong_hi_s : float
+        After a fast rise with no sound in the window, a strong sound up to this long after
+        the F/T onset sets the time (the F/T left its baseline before the contact: a push,
+        a brush, the approach).
+    audio_strong : float
+        Power ratio over the noise floor of such a strong sound (30 = +15 dB).
 
     """
 
@@ -153,6 +164,8 @@ class LabelSettings:
     audio_rise: float = 5.0
     audio_hold: float = 0.8
     audio_k: float = 5.0
+    audio_strong_hi_s: float = 0.08
+    audio_strong: float = 30.0
 
 
 @dataclass
@@ -436,6 +449,14 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
                                    around=ft_onset,
                                    settings=dataclasses.replace(s, audio_lo_s=lo))
+        if a_on is None:
+            # no sound where a fast rise puts the contact: the F/T may have left its baseline
+            # early (a push, a brush); a loud impact just after it is the contact
+            a_on, _ratio = audio_onset(
+                audio=audio, rate=float(audio_rate), t0=float(audio_t0), around=ft_onset,
+                settings=dataclasses.replace(s, audio_lo_s=s.audio_hi_s,
+                                             audio_hi_s=s.audio_strong_hi_s,
+                                             audio_rise=s.audio_strong))
         if a_on is not None:
             onset, source = a_on, 'audio'
         else:

@@ -25,15 +25,24 @@ messages have the same field names as rclpy messages (``header.stamp.sec``,
 serves recorded bags and the live node. ROS 1 messages are deserialised with the definitions
 every ROS 1 bag stores; their field names are the same (ROS 1's ``Header.seq`` is never read),
 see :mod:`contact_detector.io.ros1`.
+
+A damaged bag still yields what can be read (:mod:`contact_detector.io.salvage`): a bag the
+readers cannot open (a ROS 1 bag cut short before its index, an mcap file without its footer,
+a rosbag2 directory whose ``metadata.yaml`` is missing or broken, a sqlite3 database with
+unreadable pages) is scanned for its messages, and one warning per bag (logger
+``contact_detector.io.bags``) names the bag, the damage and the messages read and lost. A
+message whose bytes do not deserialise is skipped and counted in the same way. Only a bag with
+nothing readable raises :class:`~contact_detector.errors.BagError`.
 """
 
 from contextlib import contextmanager, ExitStack
 import json
+import logging
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, NamedTuple, Sequence
 
 from contact_detector.errors import BagError
-from contact_detector.io import ros1
+from contact_detector.io import ros1, salvage
 import numpy as np
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Reader as Ros1Reader
@@ -50,6 +59,8 @@ TRUTH_TYPE = 'std_msgs/msg/Bool'
 MANIFEST_NAME = 'manifest.json'
 
 _TYPESTORE = None
+_LOG = logging.getLogger(__name__)
+_WARNED: set = set()
 
 
 def jazzy_typestore():
@@ -70,8 +81,19 @@ class BagMessage(NamedTuple):
 
 
 def is_bag_dir(path: Path) -> bool:
-    """Return True if ``path`` is a rosbag2 directory (contains ``metadata.yaml``)."""
-    return path.is_dir() and (path / 'metadata.yaml').is_file()
+    """
+    Return True if ``path`` is a rosbag2 directory.
+
+    That is a directory holding ``metadata.yaml``, or (its ``metadata.yaml`` lost) storage
+    files (``*.db3``, ``*.mcap``) and no subdirectory (a folder of bags is not a bag).
+    """
+    if not path.is_dir():
+        return False
+    if (path / 'metadata.yaml').is_file():
+        return True
+    entries = list(path.iterdir())
+    return not any(p.is_dir() for p in entries) and any(
+        p.suffix in ('.db3', '.mcap') and p.is_file() for p in entries)
 
 
 def is_ros1_bag(path: Path) -> bool:
@@ -112,7 +134,7 @@ def find_bags(paths: Sequence[str | Path]) -> list[Path]:
         path = Path(item)
         if not path.exists():
             raise BagError(f'no such bag or directory: {path}')
-        if path.is_file() and path.suffix in ('.db3', '.mcap') and is_bag_dir(path.parent):
+        if path.is_file() and path.suffix in ('.db3', '.mcap'):
             found = [path.parent]
         elif is_bag(path):
             found = [path]
@@ -177,6 +199,11 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
     """
     Yield the messages of a bag in log-time order.
 
+    A damaged bag yields what can be read (see the module docstring): the messages before the
+    damage (and, for sqlite3, after it where the table reads again), with one warning naming
+    the bag and what was lost. A message whose bytes do not deserialise is skipped, counted and
+    reported in one warning when the iteration ends.
+
     Parameters
     ----------
     path : Path
@@ -196,42 +223,182 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
     Raises
     ------
     BagError
-        The bag cannot be opened, or a message cannot be deserialised (e.g. its type is
-        neither embedded in the bag nor a Jazzy standard type).
+        Nothing in the bag can be read, or a message's type is neither embedded in the bag nor
+        a Jazzy standard type.
 
     """
     path = Path(path)
     _check_bag(path)
     is1 = is_ros1_bag(path)
     decoders = (ros1.FAST_DECODERS if is1 else decoders) if decoders else {}
+    seen = _Seen()
+    bad: dict[str, int] = {}
+    problem = None
     with ExitStack() as stack:
         try:
             # The plain reader: AnyReader's typestore set-up costs ~30 ms per bag, and the
             # fast decoders do not need it. It is opened only if a message needs rosbags.
-            reader = stack.enter_context(Ros1Reader(path) if is1 else Reader(path))
+            reader = stack.enter_context(_plain_reader(path, fast=bool(decoders)))
         except Exception as err:  # rosbags raises several unrelated types for bad bags
-            raise BagError(f'cannot open bag {path}: {err}') from err
-        conns = [c for c in reader.connections if topics is None or c.topic in topics]
-        if not conns:
-            return
-        typed = None
-        try:
-            for conn, log_ns, raw in reader.messages(connections=conns):
-                decode = decoders.get(conn.msgtype)
-                msg = None if decode is None else decode(raw)
-                if msg is None:
-                    if typed is None:
-                        typed = stack.enter_context(open_reader(path))
+            problem = f'it does not open ({_first_line(err)})'
+        if problem is None:
+            conns = [c for c in reader.connections if topics is None or c.topic in topics]
+            if not conns:
+                return
+            typed = []
+
+            def slow(raw: bytes, msgtype: str) -> Any:
+                if not typed:
+                    typed.append(stack.enter_context(open_reader(path)))
+                return typed[0].deserialize(raw, msgtype)
+
+            def known(msgtype: str) -> bool:
+                return msgtype in typed[0].typestore.fielddefs if typed else False
+
+            try:
+                for conn, log_ns, raw in reader.messages(connections=conns):
+                    decode = decoders.get(conn.msgtype)     # inline: the per-message path
                     try:
-                        msg = typed.deserialize(raw, conn.msgtype)
-                    except Exception as err:
-                        raise BagError(f'{path}: cannot deserialise {conn.topic} '
-                                       f'({conn.msgtype}): {err}') from err
-                yield BagMessage(conn.topic, conn.msgtype, int(log_ns), msg)
-        except BagError:
-            raise
-        except Exception as err:
-            raise BagError(f'{path}: error while reading messages: {err}') from err
+                        msg = None if decode is None else decode(raw)
+                    except Exception:  # a fast reader tripped on damaged bytes: rosbags judges
+                        msg = None
+                    if msg is None:
+                        msg = _decode(path, raw, conn.topic, conn.msgtype, decoders={},
+                                      slow=slow, known=known, bad=bad)
+                        if msg is None:
+                            continue
+                    log_ns = int(log_ns)
+                    seen.add(conn.topic, log_ns)
+                    yield BagMessage(conn.topic, conn.msgtype, log_ns, msg)
+            except BagError:
+                raise
+            except Exception as err:  # the bag is damaged past the messages read so far
+                problem = f'it is damaged after {seen.count} messages ({_first_line(err)})'
+    if problem is not None:
+        saved = _salvaged(path, problem)
+        wanted = {k for k, c in saved.conns.items() if topics is None or c.topic in topics}
+        for key, log_ns, raw in saved.messages:
+            if key not in wanted or seen.has(saved.conns[key].topic, log_ns):
+                continue
+            conn = saved.conns[key]
+            msg = _decode(path, raw, conn.topic, conn.msgtype, decoders=decoders,
+                          slow=saved.deserialize, known=saved.knows, bad=bad)
+            if msg is not None:
+                yield BagMessage(conn.topic, conn.msgtype, log_ns, msg)
+    if bad:
+        counts = ', '.join(f'{n} on {topic}' for topic, n in sorted(bad.items()))
+        _warn_once(f'damaged bag {path}: skipped {sum(bad.values())} messages whose bytes do '
+                   f'not deserialise ({counts})')
+
+
+def _metadata(path: Path) -> dict | None:
+    """Read a rosbag2 directory's ``metadata.yaml`` with libyaml (None if it does not read)."""
+    try:
+        import yaml
+        loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+        return yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
+                         Loader=loader)['rosbag2_bagfile_information']
+    except Exception:  # missing or broken: the callers let rosbags (or salvage) read the bag
+        return None
+
+
+def _plain_reader(path: Path, *, fast: bool) -> Any:
+    """
+    Return the storage reader of ``iter_messages``: rosbags' ROS 1 or rosbag2 reader.
+
+    With ``fast`` (the offline tools' decoders), a single uncompressed sqlite3 file is read by
+    :class:`contact_detector.io.salvage.Sqlite3Reader`, which skips rosbags' counting scans.
+    """
+    if is_ros1_bag(path):
+        return Ros1Reader(path)
+    info = _metadata(path) if fast else None
+    if info is not None and info.get('storage_identifier') == 'sqlite3' \
+            and not info.get('compression_format') \
+            and len(info.get('relative_file_paths') or ()) == 1:
+        file = path / info['relative_file_paths'][0]
+        if file.is_file():
+            return salvage.Sqlite3Reader(file)
+    return Reader(path)
+
+
+class _Seen:
+    """Messages yielded so far, to skip them when a bag read falls back to salvage."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.last_ns = -1
+        self.at_last: dict = {}
+
+    def add(self, topic: str, log_ns: int) -> None:
+        self.count += 1
+        if log_ns != self.last_ns:
+            self.last_ns, self.at_last = log_ns, {}
+        self.at_last[topic] = self.at_last.get(topic, 0) + 1
+
+    def has(self, topic: str, log_ns: int) -> bool:
+        # both reads are in log-time order: all before the last time yielded was yielded
+        if log_ns != self.last_ns:
+            return log_ns < self.last_ns
+        left = self.at_last.get(topic, 0)
+        self.at_last[topic] = left - 1
+        return left > 0
+
+
+def _decode(path: Path, raw: bytes, topic: str, msgtype: str, *,
+            decoders: Mapping[str, Callable[[bytes], Any]], slow: Callable[[bytes, str], Any],
+            known: Callable[[str], bool], bad: dict) -> Any:
+    """Deserialise one message; None (counted in ``bad``) if its bytes are damaged."""
+    decode = decoders.get(msgtype)
+    if decode is not None:
+        try:
+            msg = decode(raw)
+        except Exception:  # a fast reader that trips on damaged bytes: let rosbags judge
+            msg = None
+        if msg is not None:
+            return msg
+    try:
+        return slow(raw, msgtype)
+    except Exception as err:
+        if not known(msgtype):
+            raise BagError(f'{path}: cannot deserialise {topic} ({msgtype}): {err}') from err
+        bad[topic] = bad.get(topic, 0) + 1
+        return None
+
+
+def _expected_count(path: Path) -> int | None:
+    """Message count that ``metadata.yaml`` gives, if it reads."""
+    try:
+        return int(_metadata(path)['message_count'])
+    except Exception:  # missing or broken: unknown
+        return None
+
+
+_SALVAGED: dict = {}
+
+
+def _salvaged(path: Path, problem: str) -> salvage.Salvaged:
+    """Salvage a bag once per process state of the file; warn once."""
+    files = sorted(path.iterdir()) if path.is_dir() else [path]
+    key = (str(path.resolve()), tuple((f.name, f.stat().st_size, f.stat().st_mtime_ns)
+                                      for f in files if f.is_file()))
+    if key not in _SALVAGED:
+        expected = _expected_count(path) if path.is_dir() else None
+        if len(_SALVAGED) > 8:
+            _SALVAGED.clear()
+        _SALVAGED[key] = salvage.salvage(path, problem=problem, expected=expected)
+    saved = _SALVAGED[key]
+    _warn_once(f'damaged bag {path}: {saved.summary()}')
+    return saved
+
+
+def _first_line(err: Exception) -> str:
+    return (str(err).strip().splitlines() or [type(err).__name__])[0]
+
+
+def _warn_once(text: str) -> None:
+    if text not in _WARNED:
+        _WARNED.add(text)
+        _LOG.warning('warning: %s', text)
 
 
 def iter_cdr(path: Path, *, topics: Sequence[str] | None = None
@@ -290,10 +457,12 @@ def topic_types(path: Path) -> dict[str, str]:
     """
     Topic name -> message type of a bag (from its index: no message is read).
 
+    A damaged bag gives the topics that can be read (see :func:`iter_messages`).
+
     Raises
     ------
     BagError
-        Not a bag, or it cannot be opened.
+        Not a bag, or nothing in it can be read.
 
     """
     path = Path(path)
@@ -301,19 +470,15 @@ def topic_types(path: Path) -> dict[str, str]:
     if is_bag_dir(path):
         # metadata.yaml with libyaml: rosbags' reader parses it with ruamel (~50 ms a bag)
         try:
-            import yaml
-            loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
-            info = yaml.load((path / 'metadata.yaml').read_text(encoding='utf-8'),
-                             Loader=loader)['rosbag2_bagfile_information']
             return {t['topic_metadata']['name']: t['topic_metadata']['type']
-                    for t in info['topics_with_message_count']}
+                    for t in _metadata(path)['topics_with_message_count']}
         except Exception:  # anything unusual: let rosbags read it (and report the problem)
             pass
     try:
         with (Ros1Reader(path) if is_ros1_bag(path) else Reader(path)) as reader:
             return {c.topic: c.msgtype for c in reader.connections}
     except Exception as err:  # rosbags raises several unrelated types for bad bags
-        raise BagError(f'cannot open bag {path}: {err}') from err
+        return _salvaged(path, f'it does not open ({_first_line(err)})').topic_types()
 
 
 def read_truth(path: Path, *, topic: str = TRUTH_TOPIC) -> list[tuple[float, bool]]:
