@@ -34,6 +34,8 @@ from contact_detector.sim.trial import simulate_trial
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow   # writes and reads many bags, runs detect
+
 TOPICS = {'/wrist_wrench': 'geometry_msgs/msg/WrenchStamped',
           '/audio': 'std_msgs/msg/Int16MultiArray', '/contact_truth': 'std_msgs/msg/Bool'}
 

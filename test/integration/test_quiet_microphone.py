@@ -24,6 +24,8 @@ from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
 import numpy as np
 
+pytestmark = pytest.mark.slow   # writes and reads many bags, runs detect
+
 
 def _rows(path: Path) -> list:
     return [json.loads(line) for line in path.read_text().splitlines()]
