@@ -23,6 +23,7 @@ from contact_detector.io.discovery import discover_streams
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
 import numpy as np
+import pytest
 
 pytestmark = pytest.mark.slow   # writes and reads many bags, runs detect
 
