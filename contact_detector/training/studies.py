@@ -39,10 +39,10 @@ import numpy as np
 
 #: The extra features of the first grids.
 EXTRAS = ('audio_power_rel_db', 'audio_peak_rel_db', 'force_delta', 'torque_delta')
-#: The audio features measured against the tracked noise floor, and the two of round 4.
+#: The audio features measured against the tracked noise floor, and the two onset features.
 ONSET_AUDIO = ('audio_rise_db', 'audio_peak_gap_db')
 RELATIVE_AUDIO = ('audio_power_rel_db', 'audio_peak_rel_db') + ONSET_AUDIO
-#: The two F/T features of round 5.
+#: The recent maxima of the signed F/T changes.
 CHANGE_MAX = ('force_change_max', 'torque_change_max')
 ONSET = LabelWindow(0.0, 0.1)
 STATE = LabelWindow(0.0, 0.3)
@@ -56,7 +56,7 @@ _SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_m
 #: The feature settings --lofo compares: name -> columns (None: the shipped model's).
 LOFO_SETTINGS = {
     'shipped': None,
-    'round5': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
+    'angles': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
         'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
         'ft_change_angle', 'force_change_max', 'torque_change_max'),
     'invariant': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
@@ -109,7 +109,7 @@ def ablation_settings() -> List[FeatureSetting]:
                        columns=tuple(n for n in full.feature_names if n not in _SHIFT)),
         FeatureSetting('shipped, without raw audio power', full, STATE,
                        columns=tuple(n for n in full.feature_names if n != 'audio_power')),
-        FeatureSetting('shipped, without the *_change_max features (round 4)', full, STATE,
+        FeatureSetting('shipped, without the *_change_max features', full, STATE,
                        columns=tuple(n for n in full.feature_names if n not in CHANGE_MAX)),
         FeatureSetting('shipped, without the audio onset features', full, STATE,
                        columns=tuple(n for n in full.feature_names if n not in ONSET_AUDIO)),
