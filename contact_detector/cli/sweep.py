@@ -105,7 +105,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--augment-torque', type=scale_range,
                         default=WrenchAugmentation.torque_scale,
                         help='augmentation: torque scale range LOW,HIGH, log-uniform '
-                             '(default 1/3,3)')
+                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
+                             f'{WrenchAugmentation.torque_scale[1]:g})')
     parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
                         help='--lofo: frames up to this long after the onset are labelled '
                              f'contact, s (default {STATE.end_s})')

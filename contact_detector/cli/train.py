@@ -88,7 +88,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--augment-torque', type=scale_range,
                         default=WrenchAugmentation.torque_scale,
                         help='augmentation: torque scale range LOW,HIGH, log-uniform '
-                             '(default 1/3,3)')
+                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
+                             f'{WrenchAugmentation.torque_scale[1]:g})')
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
