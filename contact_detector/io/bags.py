@@ -33,6 +33,10 @@ unreadable pages) is scanned for its messages, and one warning per bag (logger
 ``contact_detector.io.bags``) names the bag, the damage and the messages read and lost. A
 message whose bytes do not deserialise is skipped and counted in the same way. Only a bag with
 nothing readable raises :class:`~contact_detector.errors.BagError`.
+
+Length: over 500 lines because it is the one reader every command shares (finding bags,
+opening each storage, falling back to :mod:`.salvage` message by message, truth and
+manifests); splitting it would put the fallback's bookkeeping in two places.
 """
 
 from contextlib import contextmanager, ExitStack

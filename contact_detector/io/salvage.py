@@ -37,6 +37,9 @@ log-time order: the offline tools' fast path.
 bag says how many messages it had), and deserialisers built from the definitions the bag
 stores. :func:`contact_detector.io.bags.iter_messages` falls back to it when a bag does not
 read, and logs one warning per bag.
+
+Length: over 500 lines because it holds one byte-level scanner per storage format (ROS 1,
+mcap, sqlite3), each small, behind one interface; they share the record bookkeeping.
 """
 
 import bz2
