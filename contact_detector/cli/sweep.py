@@ -165,6 +165,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='--lofo: score every setting also with its forests trained on '
                              'augmented wrenches (other lever arms, tared sensors; rows '
                              'SETTING+aug); the left-out family is never augmented')
+    parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
+                        help='--lofo: frames from this long after the onset are labelled '
+                             f'contact, s (default {STATE.start_s})')
     parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
                         help='--lofo: frames up to this long after the onset are labelled '
                              f'contact, s (default {STATE.end_s})')
@@ -243,13 +246,18 @@ LOFO_SETTINGS = {
     'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
     'ft-only': _SPECTRAL + _SHIFT,
+    'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
 }
 
 
 def lofo_rules() -> List[DecisionRule]:
-    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    """Return the rules --lofo scores: the shipped rule, faster, slower and evidence paths."""
     rules = [DEFAULT_RULE]
     rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
+    # Slower and safer (the F/T-only model against knocks on the hand): confirmation frames
+    # and a stricter slow path.
+    rules += [replace(DEFAULT_RULE, confirm_frames=cf) for cf in (2, 3)]
+    rules += [replace(DEFAULT_RULE, confirm_frames=cf, sustain_threshold=0.4) for cf in (1, 3)]
     rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
               for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
     return rules
@@ -279,10 +287,11 @@ def lofo(args, spec) -> str:
                     'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
     runs = [(base, suffix, fit) for base in args.lofo_settings.split(',')
             for suffix, fit in variants]
+    labels = LabelWindow(args.lofo_label_start, args.lofo_label_end)
     for base, suffix, fit in tqdm(runs, desc='lofo', unit='setting'):
         name = base + suffix
         columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
-        setting = FeatureSetting(name, config, LabelWindow(0.0, args.lofo_label_end),
+        setting = FeatureSetting(name, config, labels,
                                  columns=tuple(columns))
         folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                      n_estimators=args.trees, seed=args.seed, jobs=args.jobs,
