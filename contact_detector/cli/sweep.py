@@ -258,6 +258,9 @@ def lofo_rules() -> List[DecisionRule]:
     # and a stricter slow path.
     rules += [replace(DEFAULT_RULE, confirm_frames=cf) for cf in (2, 3)]
     rules += [replace(DEFAULT_RULE, confirm_frames=cf, sustain_threshold=0.4) for cf in (1, 3)]
+    rules += [replace(DEFAULT_RULE, threshold=th, sustain_threshold=0.4) for th in (0.8, 0.9)]
+    rules += [replace(DEFAULT_RULE, sustain_threshold=0.4, evidence_threshold=h,
+                      evidence_drift=0.3) for h in (1.0, 1.5)]
     rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
               for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
     return rules
