@@ -14,8 +14,8 @@
 
 """Training-time wrench augmentation: other lever arms and tared sensors, drawn per trial."""
 
-from contact_detector.errors import ConfigError
 from contact_detector.cli.train import DEFAULT_FEATURES
+from contact_detector.errors import ConfigError
 from contact_detector.io.sensor_stream import AudioEvent, TruthEvent, WrenchEvent
 from contact_detector.model.augmentation import (augment_events, draw, trial_seed,
                                                  WrenchAugmentation)

@@ -604,3 +604,40 @@ def test_sweep_ablation_scores_each_slow_path_threshold(data, tmp_path, capsys):
     with pytest.raises(SystemExit):
         sweep_cli.main([bags, bags, '--grid', 'none', '--ablation', '--ablation-sustain', '2'])
     assert 'thresholds must be in [0, 1]' in capsys.readouterr().err
+
+
+def test_sweep_lofo_scores_each_family_plain_and_augmented(data, tmp_path):
+    out = tmp_path / 'lofo.md'
+    bags = str(data['bags'])
+    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped,shipped+aug',
+                           '--trees', '2', '--jobs', '1', '--out', str(out)]) == 0
+    worst_part, family_part = out.read_text().split('## Every family')
+
+    def rows(text):
+        return [[cell.strip() for cell in line.strip('|').split('|')]
+                for line in text.splitlines() if line.startswith('| shipped')]
+    families = {t.condition for t in data['trials'].values()}
+    rules = {r[1] for r in rows(worst_part)}
+    # per setting and rule: the worst family, and one row per family left out
+    for setting in ('shipped', 'shipped+aug'):
+        assert {r[1] for r in rows(worst_part) if r[0] == setting} == rules
+        for rule in rules:
+            assert sorted(r[2] for r in rows(family_part)
+                          if r[0] == setting and r[1] == rule) == sorted(families)
+    assert all(r[2] in families for r in rows(worst_part))
+
+
+def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, tmp_path,
+                                                                          capsys):
+    model = tmp_path / 'aug.npz'
+    bags = str(data['bags'])
+    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '2', '--augment',
+                           '--augment-tare', '1', '--augment-torque', '0.5,2',
+                           '--out', str(model)]) == 0
+    training = load_bundle(path=model).training
+    assert training['augmentation'] == {'tare_probability': 1.0, 'tare_window_s': [0.2, 0.6],
+                                        'torque_scale': [0.5, 2.0]}
+    assert data['bundle'].training['augmentation'] is None
+    assert train_cli.main([bags, '--augment', '--augment-tare', '1.5',
+                           '--out', str(tmp_path / 'bad.npz')]) != 0
+    assert 'tare_probability' in capsys.readouterr().err

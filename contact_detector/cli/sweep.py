@@ -42,7 +42,8 @@ from contact_detector.cli.train import conditions_of, DEFAULT_FEATURES, DEFAULT_
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import load_events, StreamSpec
-from contact_detector.model.augmentation import WrenchAugmentation
+from contact_detector.model.augmentation import (AUGMENTED, scale_range,
+                                                 WrenchAugmentation)
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.sweep import (best_row, compute_frames, FeatureSetting,
                                           fit_forest, leave_one_family_out, rows_markdown,
@@ -159,12 +160,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo', action='store_true',
                         help='leave-one-family-out: pool the folders, leave each family out')
     parser.add_argument('--lofo-settings', default=','.join(LOFO_SETTINGS),
-                        help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)})')
+                        help=f'feature settings compared with --lofo (from {list(LOFO_SETTINGS)}'
+                             f'; NAME{AUGMENTED}: the forests train on augmented wrenches, '
+                             'see --augment-tare; the left-out family is never augmented)')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
-    parser.add_argument('--augment', action='store_true',
-                        help='--lofo: score every setting also with its forests trained on '
-                             'augmented wrenches (other lever arms, tared sensors; rows '
-                             'SETTING+aug); the left-out family is never augmented')
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability,
+                        help='augmentation: probability of a tared sensor (default '
+                             f'{WrenchAugmentation.tare_probability})')
+    parser.add_argument('--augment-torque', type=scale_range,
+                        default=WrenchAugmentation.torque_scale,
+                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
+                             '(default 1/3,3)')
     parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
                         help='--lofo: frames from this long after the onset are labelled '
                              f'contact, s (default {STATE.start_s})')
@@ -276,23 +283,25 @@ def lofo(args, spec) -> str:
     frames = list(compute_frames(events_by_trial=trials, config=config,
                                  audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
                                  jobs=args.jobs).values())
-    variants = [('', None)]
-    if args.augment:
-        variants.append(('+aug', list(compute_frames(
+    # SETTING+aug: the forests train on the same trials with augmented wrenches.
+    fit_frames = None
+    if any(name.endswith(AUGMENTED) for name in args.lofo_settings.split(',')):
+        fit_frames = list(compute_frames(
             events_by_trial=trials, config=config, audio_rate=args.audio_rate,
-            wrench_rate=args.wrench_rate, jobs=args.jobs, augmentation=WrenchAugmentation(),
-            seed=args.seed).values())))
+            wrench_rate=args.wrench_rate, jobs=args.jobs,
+            augmentation=WrenchAugmentation(tare_probability=args.augment_tare,
+                                            torque_scale=tuple(args.augment_torque)),
+            seed=args.seed).values())
     rules = lofo_rules()
     worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
                    'p95 [ms] | all families: detected / premature |',
                    '|---|---|---|---|---|---|---|---|']
     family_lines = ['| setting | rule | family | detected | premature | impact events | '
                     'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
-    runs = [(base, suffix, fit) for base in args.lofo_settings.split(',')
-            for suffix, fit in variants]
     labels = LabelWindow(args.lofo_label_start, args.lofo_label_end)
-    for base, suffix, fit in tqdm(runs, desc='lofo', unit='setting'):
-        name = base + suffix
+    for name in tqdm(args.lofo_settings.split(','), desc='lofo', unit='setting'):
+        base = name.removesuffix(AUGMENTED)
+        fit = fit_frames if name.endswith(AUGMENTED) else None
         columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
         setting = FeatureSetting(name, config, labels,
                                  columns=tuple(columns))

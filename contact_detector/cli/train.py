@@ -48,7 +48,8 @@ from contact_detector.features.config import (EXTRA_FEATURES, FEATURE_SCHEMA_VER
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
-from contact_detector.model.augmentation import trial_seed, WrenchAugmentation
+from contact_detector.model.augmentation import (scale_range, trial_seed,
+                                                 WrenchAugmentation)
 from contact_detector.model.bundle import (DecisionRule, ModelBundle, runtime_versions,
                                            save_bundle)
 from contact_detector.model.training import (LabelWindow, read_labels_csv, run_split,
@@ -322,9 +323,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--jobs', type=int, default=1, help='parallel workers')
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--augment', action='store_true',
-                        help='vary each trial\'s wrench before its features: lever arms '
-                             '(torque x 1/3..3) and, for half the trials, a sensor tared at '
-                             'rest (docs/model.md); drawn from --seed and the bag name')
+                        help="vary each trial's wrench before its features: other lever arms "
+                             'and tared sensors (docs/model.md); drawn from --seed and the '
+                             'bag name')
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability,
+                        help='augmentation: probability of a tared sensor (default '
+                             f'{WrenchAugmentation.tare_probability})')
+    parser.add_argument('--augment-torque', type=scale_range,
+                        default=WrenchAugmentation.torque_scale,
+                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
+                             '(default 1/3,3)')
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
@@ -450,7 +459,9 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     manifest = conditions_of(bags)
     user = set(user_bags)
 
-    augmentation = WrenchAugmentation() if args.augment else None
+    augmentation = (WrenchAugmentation(tare_probability=args.augment_tare,
+                                       torque_scale=tuple(args.augment_torque))
+                    if args.augment else None)
 
     def one(bag):
         streams = found[bag]

@@ -39,12 +39,16 @@ The audio, the truth and the stamps are passed through untouched; the draw depen
 
 from dataclasses import dataclass, replace
 import math
-import zlib
 from typing import List, Sequence, Tuple
+import zlib
 
 from contact_detector.errors import ConfigError
 from contact_detector.io.sensor_stream import Event, WrenchEvent
 import numpy as np
+
+
+#: Suffix of a ``sweep --lofo`` setting whose forests train on augmented wrenches.
+AUGMENTED = '+aug'
 
 
 @dataclass(frozen=True)
@@ -171,3 +175,17 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
 def trial_seed(*, seed: int, name: str) -> Tuple[int, int]:
     """Return the draw's entropy for one trial: the run's seed and a CRC-32 of its name."""
     return (int(seed), zlib.crc32(name.encode('utf-8')))
+
+
+def scale_range(text: str) -> Tuple[float, float]:
+    """
+    Parse a torque-scale range written ``LOW,HIGH`` (e.g. ``0.5,2``).
+
+    Raises
+    ------
+    ValueError
+        If it is not two numbers (argparse turns this into a usage error).
+
+    """
+    low, high = (float(v) for v in text.split(','))
+    return low, high

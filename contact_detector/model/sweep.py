@@ -30,9 +30,9 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize, Truth)
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.model.augmentation import augment_events, trial_seed, WrenchAugmentation
 from contact_detector.model.bundle import DecisionRule
 from contact_detector.model.compiled_forest import CompiledForest
-from contact_detector.model.augmentation import augment_events, trial_seed, WrenchAugmentation
 from contact_detector.model.training import LabelWindow
 from joblib import delayed, Parallel
 import numpy as np
