@@ -46,17 +46,15 @@ from contact_detector.model.storage import load_bundle
 
 
 def rules_of(base) -> dict:
-    """Return the rules compared: the model's, then confirmation, slow-path, evidence variants."""
+    """Return the rules compared: the model's, then faster, slower and confirmed variants."""
     rules = {'model': base}
-    for cf in (2, 3, 5):
+    for th in (0.3, 0.5):
+        rules[f'mean15>={th}'] = replace(base, sustain_threshold=th)
+    rules['p>=0.9'] = replace(base, threshold=0.9)
+    for cf in (2, 3):
         rules[f'confirm {cf}'] = replace(base, confirm_frames=cf)
-    for th in (0.4, 0.5, 0.6):
-        rules[f'confirm 3, mean15>={th}'] = replace(base, confirm_frames=3,
-                                                    sustain_threshold=th)
-    for h, d in ((1.5, 0.5), (2.5, 0.6)):
-        rules[f'confirm 3, evidence {h}/{d}'] = replace(base, confirm_frames=3,
-                                                        evidence_threshold=h,
-                                                        evidence_drift=d)
+    for h, d in ((1.0, 0.3), (1.5, 0.5)):
+        rules[f'evidence {h}/{d}'] = replace(base, evidence_threshold=h, evidence_drift=d)
     return rules
 
 

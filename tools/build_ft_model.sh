@@ -1,19 +1,39 @@
 #!/usr/bin/env bash
-# Rebuild the shipped F/T-only model (robots without a microphone): simulate the training set
-# over all twelve condition sets ('wide'), then train with --no-audio: the six spectral F/T
-# features and the six vector-shift features, the shipped rule; contact labels from 30 ms after
-# the onset (the first instants of a touch look like a knock on the hand to F/T alone). Writes
-# models/contact_forest_ft.npz (loads with numpy alone), its card and models/report_ft.
-# docs/offline.md "Robots without a microphone" has the figures and the command to check them.
+# Rebuild the shipped F/T-only model (robots without a microphone). Training data: 480
+# simulated trials over all twelve condition sets ('wide', seed 11, 40 per set); simulated into
+# DIR (default data/train_wide) unless DIR already holds those trials (its manifest says seed
+# 11, 480 trials, 'wide'). Recipe, chosen by leaving each simulator family out
+# (contact-detector sweep --lofo --lofo-settings ft-only+signed --lofo-label-start 0.03,
+# docs/offline.md "Robots without a microphone"): train --no-audio with the six spectral F/T
+# features, the six vector-shift features and the four signed change features of the
+# multimodal model (force_change, torque_change, *_change_max: a knock on the hand pushes the
+# load up before it rebounds, a touch unloads without that push); contact labels from 30 ms
+# after the onset (the first instants of a touch look like a knock to F/T alone); release at
+# the first frame with p >= 0.95 or when the mean P(contact) of the last 15 frames reaches 0.4
+# (the rule with the fewest premature releases in the worst left-out family, exogenous).
+# Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
+# features, labels, rule) and models/report_ft.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
 cd "$root"
 data="${1:-$root/data/train_wide}"
-.venv/bin/contact-detector simulate "$data" --trials 240 --seed 11 --conditions wide \
-  --overwrite --quiet
+if ! .venv/bin/python - "$data" <<'EOF'
+import json, sys
+from pathlib import Path
+try:
+    s = json.loads((Path(sys.argv[1]) / 'manifest.json').read_text())['settings']
+except (OSError, ValueError, KeyError):
+    sys.exit(1)
+sys.exit(0 if (s.get('seed'), s.get('trials'), s.get('start_index')) == (11, 480, 0)
+         and len(s.get('conditions', ())) == 12 else 1)
+EOF
+then
+  .venv/bin/contact-detector simulate "$data" --trials 480 --seed 11 --conditions wide \
+    --overwrite --quiet
+fi
 .venv/bin/contact-detector train "$data" --no-audio \
-  --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max \
+  --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max \
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
-  --threshold 0.95 --sustain-frames 15 --sustain-threshold 0.3 \
-  --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0
+  --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
+  --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

@@ -107,6 +107,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='augmentation: torque scale range LOW,HIGH, log-uniform '
                              f'(default {WrenchAugmentation.torque_scale[0]:g},'
                              f'{WrenchAugmentation.torque_scale[1]:g})')
+    parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
+                        help='--lofo: frames from this long after the onset are labelled '
+                             f'contact, s (default {STATE.start_s})')
     parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
                         help='--lofo: frames up to this long after the onset are labelled '
                              f'contact, s (default {STATE.end_s})')
@@ -155,6 +158,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             trials.update(decode(find_bags([folder]), spec, f'{i}'))
         output = lofo_study(trials=trials, settings=args.lofo_settings.split(','),
                             label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
+                            label_start_s=args.lofo_label_start,
                             augmentation=augmentation,
                             audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
                             jobs=args.jobs,

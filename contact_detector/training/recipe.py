@@ -55,9 +55,11 @@ MIN_RECORDINGS = 3
 #: mean P(contact) of the last 15 frames reaches 0.3.
 DEFAULT_FEATURES = FeatureConfig.shipped()
 #: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
-#: do not depend on the sensor's orientation, tare or sign convention (docs/offline.md,
-#: "Robots without a microphone").
-DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES
+#: do not depend on the sensor's orientation, tare or sign convention, and the signed changes
+#: of |F| and |T| with their recent maxima, which tell a knock on the hand from a touch
+#: (chosen by leaving each family out: docs/offline.md, "Robots without a microphone").
+DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES + ('force_change', 'torque_change', 'force_change_max',
+                                          'torque_change_max')
 #: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
 NO_AUDIO_RATE = 16000
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)

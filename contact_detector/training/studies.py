@@ -63,6 +63,7 @@ LOFO_SETTINGS = {
     'invariant-no-raw-power': _SPECTRAL + RELATIVE_AUDIO + _SHIFT,
     'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
     'ft-only': _SPECTRAL + _SHIFT,
+    'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
 }
 
 
@@ -130,9 +131,16 @@ def ablation_settings() -> List[FeatureSetting]:
 
 
 def lofo_rules() -> List[DecisionRule]:
-    """Return the rules --lofo scores: the shipped rule, faster thresholds, evidence paths."""
+    """Return the rules --lofo scores: the shipped rule, faster, slower and evidence paths."""
     rules = [DEFAULT_RULE]
     rules += [replace(DEFAULT_RULE, threshold=th) for th in (0.8, 0.9)]
+    # Slower and safer (the F/T-only model against knocks on the hand): confirmation frames
+    # and a stricter slow path.
+    rules += [replace(DEFAULT_RULE, confirm_frames=cf) for cf in (2, 3)]
+    rules += [replace(DEFAULT_RULE, confirm_frames=cf, sustain_threshold=0.4) for cf in (1, 3)]
+    rules += [replace(DEFAULT_RULE, threshold=th, sustain_threshold=0.4) for th in (0.8, 0.9)]
+    rules += [replace(DEFAULT_RULE, sustain_threshold=0.4, evidence_threshold=h,
+                      evidence_drift=0.3) for h in (1.0, 1.5)]
     rules += [replace(DEFAULT_RULE, evidence_threshold=h, evidence_drift=d)
               for d in (0.3, 0.4, 0.5) for h in (0.5, 1.0, 1.5, 2.5)]
     return rules
@@ -183,7 +191,7 @@ def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
 
 
 def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
-               trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
+               trees: int, label_start_s: float = 0.0, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
@@ -215,7 +223,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
         augmented = name.endswith(AUGMENTED)
         columns = (LOFO_SETTINGS[name.removesuffix(AUGMENTED)]
                    or DEFAULT_FEATURES.feature_names)
-        setting = FeatureSetting(name, config, LabelWindow(0.0, label_end_s),
+        setting = FeatureSetting(name, config, LabelWindow(label_start_s, label_end_s),
                                  columns=tuple(columns))
         folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                      n_estimators=trees, seed=seed, jobs=jobs,

@@ -33,10 +33,11 @@ from geometry_msgs.msg import WrenchStamped
 import node_support
 import numpy as np
 import pytest
+from rcl_interfaces.msg import Log
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool, Float32, Int16MultiArray
 
@@ -50,14 +51,14 @@ stamp = node_support.stamp
 
 
 class FtHarness:
-    """The node under test, a feeder for /clock, wrench (and audio nobody should hear)."""
+    """The node under test, a feeder for /clock, wrench and audio; its /rosout lines."""
 
-    def __init__(self, context, **params):
+    def __init__(self, context, name='contact_detector', **params):
         values = {'use_sim_time': True, 'qos.reliability': 'reliable', 'qos.depth': 1000,
                   'diagnostics.period_s': 0.5}
         values.update(params)
         self.node = ContactDetectorNode(
-            context=context,
+            name, context=context,
             parameter_overrides=[Parameter(k, value=v) for k, v in values.items()])
         self.io = rclpy.create_node('test_io_ft', context=context)
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -70,6 +71,11 @@ class FtHarness:
                                       (Bool, 'release', self.release),
                                       (DiagnosticArray, '/diagnostics', self.diag)):
             self.io.create_subscription(msg_type, topic, sink.append, reliable)
+        self.logs = []
+        logs_qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.io.create_subscription(
+            Log, '/rosout', lambda m: self.logs.append(m) if m.name == name else None, logs_qos)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.executor.add_node(self.io)
@@ -83,6 +89,11 @@ class FtHarness:
         while not predicate():
             if time.monotonic() > end:
                 raise AssertionError('timed out waiting for the node')
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def spin_for(self, seconds: float) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
             self.executor.spin_once(timeout_sec=0.01)
 
     def set_clock(self, t: float) -> None:
@@ -167,7 +178,9 @@ def test_audio_disabled_refuses_a_model_that_needs_audio(context):
 
 def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
     trial = simulate_trial(**TRIAL)
-    h = FtHarness(context, **{'model.path': str(default_model_path()), 'audio.timeout_s': 0.3})
+    # A node name of its own: rcl keeps one /rosout publisher per logger name and process.
+    h = FtHarness(context, name='contact_detector_audio_stops',
+                  **{'model.path': str(default_model_path()), 'audio.timeout_s': 0.3})
     try:
         h.spin_until(lambda: h.audio_pub.get_subscription_count() > 0)
         stop = trial.onset_t - 1.2          # the audio publisher dies between the two knocks
@@ -199,5 +212,10 @@ def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
             for d in h.diag), timeout=5.0)
         status = h.diag[-1].status[0]
         assert 'F/T-only model active' in status.message
+        # One log line for the one switch.
+        h.spin_until(lambda: any('model switched' in m.msg for m in h.logs), timeout=5.0)
+        h.spin_for(0.3)
+        switched = [m.msg for m in h.logs if 'model switched' in m.msg]
+        assert len(switched) == 1 and 'model switched to F/T-only' in switched[0]
     finally:
         h.close()
