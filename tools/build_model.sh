@@ -10,5 +10,5 @@ cd "$root"
 data="${1:-$root/data/train}"
 .venv/bin/contact-detector simulate "$data" --trials 480 --seed 11 --conditions wide \
   --overwrite --quiet
-.venv/bin/contact-detector train "$data" --augment --out models/contact_forest.npz \
+.venv/bin/contact-detector train "$data" --out models/contact_forest.npz \
   --report models/report --jobs 2 --seed 0
