@@ -25,7 +25,8 @@ running with ``use_sim_time:=true`` (the equivalent of ``ros2 bag play --clock``
 reset. ``--wait-for-subscribers S`` creates every publisher first and waits up to S seconds
 until each topic has a subscriber, so the start of the bag is not lost to DDS discovery (which
 can take seconds). DDS stays on this machine only if ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
-is set (the README's commands set it).
+is set (the README's commands set it). The player is
+:func:`contact_detector.ros.player.replay_bag`.
 """
 
 import argparse
@@ -51,48 +52,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='before playing, wait up to S seconds until every topic has a '
                              'subscriber (default 0: start at once)')
     args = parser.parse_args(argv)
-
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    from contact_detector.ros.player import BagPlayer, read_recording
+    from contact_detector.ros.player import replay_bag
 
     try:
-        records = read_recording(args.bag, topics=args.topics)
+        replay_bag(bag=args.bag, rate=args.rate, loop=args.loop, clock=args.clock,
+                   restamp=args.restamp, topics=args.topics,
+                   wait_for_subscribers_s=args.wait_for_subscribers)
     except ContactDetectorError as err:
         print(f'contact-detector replay: {err}', file=sys.stderr)
         return 1
-    if not records:
-        print(f'contact-detector replay: {args.bag} has no messages', file=sys.stderr)
-        return 1
-    rclpy.init()
-    node = rclpy.create_node('contact_detector_replay')
-    try:
-        player = BagPlayer(node=node, rate=args.rate, clock=args.clock, restamp=args.restamp,
-                           log=node.get_logger().warning)
-        duration = (records[-1].log_ns - records[0].log_ns) * 1e-9
-        if args.wait_for_subscribers > 0:
-            lonely = player.wait_for_subscribers(records, timeout_s=args.wait_for_subscribers)
-            if lonely:
-                print(f'no subscriber after {args.wait_for_subscribers:g} s on '
-                      f'{", ".join(lonely)}; playing anyway', flush=True)
-        while True:
-            print(f'playing {args.bag.name}: {len(records)} messages, {duration:.1f} s '
-                  f'at {args.rate:g}x', flush=True)
-            player.play(records)
-            if not args.loop:
-                break
-        if not player.flush(timeout_s=5.0):
-            print('some subscribers did not acknowledge the last messages within 5 s',
-                  flush=True)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ContactDetectorError as err:
-        print(f'contact-detector replay: {err}', file=sys.stderr)
-        return 1
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     return 0
 
 

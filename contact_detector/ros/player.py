@@ -25,6 +25,8 @@ unchanged; ROS 1 bags are converted to ROS 2 CDR first
 * ``restamp``: shift every ``header.stamp`` by the offset between bag time and this machine's
   time, as if the sensors were publishing now (for nodes on wall time, like a real robot;
   real-time rate only).
+
+:func:`replay_bag` plays a bag on a node of its own (``contact-detector replay``).
 """
 
 from dataclasses import dataclass
@@ -36,6 +38,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 from contact_detector.errors import BagError
 from contact_detector.io.bags import iter_cdr
+import rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
@@ -251,3 +254,68 @@ class BagPlayer:
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp + offset_ns,
                                                                 1_000_000_000)
         return serialize_message(msg)
+
+
+def replay_bag(*, bag: Path, rate: float = 1.0, loop: bool = False, clock: bool = False,
+               restamp: bool = False, topics: Optional[Sequence[str]] = None,
+               wait_for_subscribers_s: float = 0.0) -> None:
+    """
+    Publish a bag on a node of its own (``contact_detector_replay``), as ``ros2 bag play``.
+
+    Prints what it plays to stdout. Returns when the bag has played (``loop``: never) and the
+    subscribers have acknowledged it (5 s at most), or on Ctrl-C or an external shutdown.
+
+    Parameters
+    ----------
+    bag : Path
+        rosbag2 folder or ROS 1 ``.bag``.
+    rate : float
+        Playback speed (2 = twice as fast).
+    loop : bool
+        Play again and again.
+    clock : bool
+        Publish ``/clock`` with the bag time.
+    restamp : bool
+        Shift header stamps to this machine's time (rate 1 only).
+    topics : sequence of str or None
+        Only these topics (None: all).
+    wait_for_subscribers_s : float
+        Before playing, wait up to this long until every topic has a subscriber, s (0: start
+        at once).
+
+    Raises
+    ------
+    BagError
+        The bag cannot be read or has no messages, or the options do not fit together.
+
+    """
+    from rclpy.executors import ExternalShutdownException
+
+    records = read_recording(bag, topics=topics)
+    if not records:
+        raise BagError(f'{bag} has no messages')
+    rclpy.init()
+    node = rclpy.create_node('contact_detector_replay')
+    try:
+        player = BagPlayer(node=node, rate=rate, clock=clock, restamp=restamp,
+                           log=node.get_logger().warning)
+        duration = (records[-1].log_ns - records[0].log_ns) * 1e-9
+        if wait_for_subscribers_s > 0:
+            lonely = player.wait_for_subscribers(records, timeout_s=wait_for_subscribers_s)
+            if lonely:
+                print(f'no subscriber after {wait_for_subscribers_s:g} s on '
+                      f'{", ".join(lonely)}; playing anyway', flush=True)
+        while True:
+            print(f'playing {bag.name}: {len(records)} messages, {duration:.1f} s '
+                  f'at {rate:g}x', flush=True)
+            player.play(records)
+            if not loop:
+                break
+        if not player.flush(timeout_s=5.0):
+            print('some subscribers did not acknowledge the last messages within 5 s',
+                  flush=True)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()

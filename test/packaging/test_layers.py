@@ -17,7 +17,8 @@ The package's layers only point down (docs/architecture.md, "Layers").
 
 Every ``import`` of the package, at module level or inside a function, is read from the
 source with :mod:`ast`. A subpackage may import from itself and from the layers below it,
-never from a layer above it nor from another subpackage of its own layer.
+never from a layer above it nor from another subpackage of its own layer. Only ``ros/`` imports
+rclpy, the ament index and ROS message, service and action packages.
 """
 
 import ast
@@ -41,10 +42,13 @@ LAYERS = (
     ('cli',),
 )
 RANK = {name: rank for rank, names in enumerate(LAYERS) for name in names}
-#: ROS modules: the core (all but ``ros/`` and ``cli/``) runs without them.
-ROS_MODULES = ('rclpy', 'ament_index_python', 'rcl_interfaces', 'std_msgs', 'geometry_msgs',
-               'sensor_msgs', 'diagnostic_msgs', 'trajectory_msgs', 'control_msgs',
-               'audio_common_msgs', 'lifecycle_msgs', 'launch', 'launch_ros')
+#: ROS modules, imported only in ``ros/``: the core and the commands run without them.
+ROS_MODULES = ('rclpy', 'ament_index_python', 'rcl_interfaces', 'std_msgs', 'std_srvs',
+               'geometry_msgs', 'sensor_msgs', 'diagnostic_msgs', 'trajectory_msgs',
+               'control_msgs', 'audio_common_msgs', 'lifecycle_msgs', 'rosgraph_msgs',
+               'builtin_interfaces', 'rosidl_runtime_py', 'launch', 'launch_ros')
+#: Name endings of ROS interface packages (messages, services, actions) not listed above.
+ROS_PACKAGE_SUFFIXES = ('_msgs', '_srvs', '_interfaces', '_actions')
 #: Modules of ``cli/`` that are not commands: the dispatcher and the options commands share.
 CLI_SUPPORT = ('__init__', 'main', 'common', 'model_options')
 
@@ -95,11 +99,33 @@ def test_no_module_imports_from_a_layer_above_or_beside_it() -> None:
     assert not wrong, 'imports that do not point down:\n' + '\n'.join(wrong)
 
 
-def test_the_core_has_no_ros_import() -> None:
-    wrong = [f'{path.relative_to(REPO)}:{line} imports {module}'
-             for path in _package_modules() if _layer(path) not in ('ros', 'cli')
-             for line, module in _imports(path) if module.split('.')[0] in ROS_MODULES]
-    assert not wrong, 'ROS imports in the core:\n' + '\n'.join(wrong)
+def _is_ros(module: str) -> bool:
+    """Return whether ``module`` is rclpy, the ament index or a ROS interface package."""
+    top = module.split('.')[0]
+    return top in ROS_MODULES or top.endswith(ROS_PACKAGE_SUFFIXES)
+
+
+def _ros_imports(paths) -> list:
+    """Return ``path:line imports module`` for every ROS import in ``paths``."""
+    return [f'{path.relative_to(REPO) if path.is_relative_to(REPO) else path}:{line} '
+            f'imports {module}'
+            for path in paths for line, module in _imports(path) if _is_ros(module)]
+
+
+def test_only_ros_imports_rclpy_and_ros_messages() -> None:
+    outside = [path for path in _package_modules() if _layer(path) != 'ros']
+    wrong = _ros_imports(outside)
+    assert not wrong, 'ROS imports outside contact_detector/ros/:\n' + '\n'.join(wrong)
+
+
+def test_the_check_sees_a_ros_import(tmp_path: Path) -> None:
+    module = tmp_path / 'command.py'
+    module.write_text('import numpy\nimport rosbags.rosbag2\n'
+                      'def run():\n    import rclpy.executors\n'
+                      '    from std_srvs.srv import SetBool\n'
+                      '    from my_robot_msgs.msg import Grip\n')
+    assert [m.split(' imports ')[1] for m in _ros_imports([module])] == [
+        'rclpy.executors', 'std_srvs.srv', 'my_robot_msgs.msg']
 
 
 @pytest.mark.parametrize('folder', ['cli', 'benchmarks'])
