@@ -17,7 +17,7 @@
 
     contact-detector sweep TRAIN_DIR HELDOUT_DIR [--grid quick|full] [--jobs 2] [--out FILE.md]
     contact-detector sweep DIR... --lofo [--lofo-settings shipped,invariant] [--out FILE.md]
-    contact-detector sweep DIR... --model M [--own-test TRAIN_DIR] [--out FILE.md]
+    contact-detector sweep DIR... --model M [--own-test TRAIN_DIR] [--knocks] [--out FILE.md]
 
 With ``--lofo`` every trial of every folder is pooled and grouped by family (its condition set
 in the manifest); for each family a forest is trained on all the others and every candidate
@@ -37,6 +37,8 @@ With ``--model`` no forest is trained: the rules (the model's own, the threshold
 confirmation grid, single-frame paths with a slow path) are scored with that model's features,
 labels and trees on every trial of the folders, and with ``--own-test`` also on the model's own
 trial-split test trials found in TRAIN_DIR: the check of a rule on the model that ships.
+``--knocks`` adds, per folder, the trials with a knock on the hand while the object is in the
+air (the F/T-only model's safety figure).
 """
 
 import argparse
@@ -46,6 +48,7 @@ import sys
 from typing import List, Optional, Sequence
 
 from contact_detector.errors import ContactDetectorError
+from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
@@ -129,14 +132,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='score the rules with this trained model instead of training')
     parser.add_argument('--own-test', type=Path, default=None, metavar='TRAIN_DIR',
                         help="--model: also score the model's own test trials in TRAIN_DIR")
+    parser.add_argument('--knocks', action='store_true',
+                        help='--model: also score, per folder, the trials with a knock on the '
+                             'hand while the object is in the air (simulator manifests)')
     parser.add_argument('--audio-rate', type=float, default=16000.0)
     parser.add_argument('--wrench-rate', type=float, default=100.0)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
     spec = StreamSpec()
-    if args.own_test is not None and args.model is None:
-        parser.error('--own-test needs --model')
+    if (args.own_test is not None or args.knocks) and args.model is None:
+        parser.error('--own-test and --knocks need --model')
     if args.model is not None:
         try:
             output = with_model(args, spec)
@@ -210,6 +216,10 @@ def with_model(args, spec) -> str:
     for i, folder in enumerate(args.bags):
         trials = decode(find_bags([folder]), spec, f'{i}')
         groups.append((f'{Path(folder).name}: {len(trials)} trials', trials))
+        if args.knocks:
+            knocked = {name: trial for name, trial in trials.items() if knocked_in_air(trial[1])}
+            groups.append((f'{Path(folder).name}: {len(knocked)} trials with a knock on the hand '
+                           'in the air', knocked))
     return model_study(bundle=bundle, groups=groups,
                        title=f'## Rules scored with {args.model.name} ({bundle.model_id})',
                        audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,

@@ -50,3 +50,8 @@ def truth_for(bag: Path, events, manifest: dict) -> Truth:
     if not onsets:
         raise BagError(f'{bag}: no manifest entry and no True on /contact_truth')
     return Truth(name=bag.name, condition='', onset_t=onsets[0][0])
+
+
+def knocked_in_air(truth: Truth) -> bool:
+    """Return True if the trial has a knock on the hand while the object is in the air."""
+    return any(kind == 'hand' and in_air for _, kind, in_air in truth.impacts)

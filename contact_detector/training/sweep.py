@@ -22,7 +22,7 @@ rule, then scored by :mod:`contact_detector.evaluation.metrics`. The ``evaluate`
 re-measures the chosen defaults through the full detector.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
@@ -103,13 +103,21 @@ def rule_grid() -> List[DecisionRule]:
 
 def model_rules(shipped: DecisionRule) -> List[DecisionRule]:
     """
-    Rules scored with a trained model: its own, :func:`rule_grid`, and the single-frame paths.
+    Rules scored with a trained model: its own, its variants, :func:`rule_grid`, single frames.
 
-    The model's rule first; then the grid; thresholds 0.6, 0.8, 0.85 with 1-3 confirmation
-    frames; and the fast single-frame path (0.8, 0.85, 0.9) with a 10-frame slow path at 0.4
-    or 0.5 for quiet contacts.
+    The model's rule first; then the model's rule with the slow path at 0.3, 0.4 and 0.5,
+    the fast path at 0.9, 2 or 3 confirmation frames, and the evidence paths
+    ``sum(p - 0.3) >= 1`` and ``sum(p - 0.5) >= 1.5``; then the grid; thresholds 0.6, 0.8,
+    0.85 with 1-3 confirmation frames; and the fast single-frame path (0.8, 0.85, 0.9) with a
+    10-frame slow path at 0.4 or 0.5 for quiet contacts. Duplicates are dropped.
     """
-    rules = [shipped] + rule_grid()
+    rules = [shipped]
+    rules += [replace(shipped, sustain_threshold=th) for th in (0.3, 0.4, 0.5)]
+    rules += [replace(shipped, threshold=0.9)]
+    rules += [replace(shipped, confirm_frames=cf) for cf in (2, 3)]
+    rules += [replace(shipped, evidence_threshold=h, evidence_drift=d)
+              for h, d in ((1.0, 0.3), (1.5, 0.5))]
+    rules += rule_grid()
     rules += [DecisionRule(threshold=t, confirm_frames=k) for t in (0.6, 0.8, 0.85)
               for k in (1, 2, 3)]
     rules += [DecisionRule(threshold=t, confirm_frames=1, sustain_frames=10,

@@ -41,7 +41,7 @@ def data(tmp_path_factory):
     model = root / 'm.npz'
     assert train_cli.main([str(bags), '--no-events', '--jobs', '1', '--trees', '3',
                            '--out', str(model)]) == 0
-    return {'bags': bags, 'model': model}
+    return {'bags': bags, 'model': model, 'trials': trials}
 
 
 def _table(text: str) -> list:
@@ -76,10 +76,25 @@ def test_model_rules_are_scored_on_its_test_trials_and_the_folders(data, tmp_pat
     capsys.readouterr()
 
 
+def test_knocks_scores_the_trials_knocked_on_the_hand_in_the_air(data, tmp_path, capsys):
+    out = tmp_path / 'knocks.md'
+    assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--knocks',
+                           '--jobs', '1', '--out', str(out)]) == 0
+    knocked = sum(any(i.kind == 'hand' and i.in_air for i in t.impacts) for t in data['trials'])
+    assert 0 < knocked < len(data['trials'])
+    rows = _table(out.read_text())
+    bundle = load_bundle(path=data['model'])
+    group = [r for r in rows if 'knock on the hand' in r[0]]
+    assert len(group) == len(model_rules(bundle.decision_rule))
+    assert group[0][0] == f'bags: {knocked} trials with a knock on the hand in the air'
+    assert {r[2].split('/')[1] for r in group} == {str(knocked)}
+    capsys.readouterr()
+
+
 def test_own_test_needs_a_model(data, capsys):
     with pytest.raises(SystemExit):
         sweep_cli.main([str(data['bags']), '--own-test', str(data['bags'])])
-    assert '--own-test needs --model' in capsys.readouterr().err
+    assert '--own-test and --knocks need --model' in capsys.readouterr().err
 
 
 def test_scores_over_seeds_are_the_sums_of_one_forest_per_seed(data):
