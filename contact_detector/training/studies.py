@@ -191,7 +191,8 @@ def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
 
 
 def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
-               trees: int, label_start_s: float = 0.0, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
+               trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
+               label_start_s: float = 0.0,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
