@@ -60,7 +60,7 @@ import time
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-HELPER = REPO / 'test' / 'e2e_helper.py'
+HELPER = ['-m', 'contact_detector.ros.live_trial']
 SHIPPED_MODEL = REPO / 'models' / 'contact_forest.npz'
 EXECUTORS = ('single_threaded', 'hot_path')
 CONFIGS = ((16000, 100.0), (44100, 100.0), (16000, 1000.0))
@@ -144,9 +144,9 @@ def run_once(*, model: str, audio_rate: int, ft_rate: float, work: Path,
     node = _spawn([__file__, '_serve', '--executor', executor, '--model', model, *sets,
                    '--audio-rate', str(audio_rate),
                    '--ft-rate', str(ft_rate), '--out', str(paths['node'])], work / 'node.log')
-    listener = _spawn([str(HELPER), 'listen', '--out', str(paths['listen']), '--stop-file',
+    listener = _spawn([*HELPER, 'listen', '--out', str(paths['listen']), '--stop-file',
                        str(stop), '--ready-file', str(ready)], work / 'listen.log')
-    publisher = _spawn([str(HELPER), 'publish', '--out', str(paths['pub']), '--audio-rate',
+    publisher = _spawn([*HELPER, 'publish', '--out', str(paths['pub']), '--audio-rate',
                         str(audio_rate), '--ft-rate', str(ft_rate), '--chunk', str(chunk),
                         '--wait-file', str(ready)], work / 'pub.log')
     proc = psutil.Process(node.pid)

@@ -15,7 +15,7 @@
 """
 Shared helpers of the node tests: a small test model and simulated-trial message streams.
 
-Used by the node tests and test/e2e_helper.py. The model is the shipped
+Used by the node tests. The model is the shipped
 ``models/contact_forest.npz`` when it exists, otherwise a small forest (8 trees) trained here
 on features of simulated trials, saved with ``save_bundle``.
 """

@@ -48,10 +48,11 @@ def test_release_after_onset_across_processes(model, tmp_path):
     node = _start(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
                    '-p', f'model.path:={model}'], tmp_path / 'node.log')
     ready = tmp_path / 'listener_ready'
-    listener = _start([str(TEST_DIR / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
-                       '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
+    listener = _start(['-m', 'contact_detector.ros.live_trial', 'listen',
+                       '--out', str(listen_json), '--stop-file', str(stop), '--max-s', '90',
+                       '--ready-file', str(ready)],
                       tmp_path / 'listen.log')
-    publisher = _start([str(TEST_DIR / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+    publisher = _start(['-m', 'contact_detector.ros.live_trial', 'publish', '--out', str(pub_json),
                         '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
     try:
         publisher.wait(timeout=75)

@@ -79,10 +79,11 @@ def test_node_detects_a_live_trial_with_the_shipped_model(tmp_path: Path) -> Non
     node = _noble(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file',
                    str(params)], tmp_path / 'node.log')
     ready = tmp_path / 'listener_ready'
-    listener = _noble([str(TEST_DIR / 'e2e_helper.py'), 'listen', '--out', str(listen_json),
-                       '--stop-file', str(stop), '--max-s', '90', '--ready-file', str(ready)],
+    listener = _noble(['-m', 'contact_detector.ros.live_trial', 'listen',
+                       '--out', str(listen_json), '--stop-file', str(stop), '--max-s', '90',
+                       '--ready-file', str(ready)],
                       tmp_path / 'listen.log')
-    publisher = _noble([str(TEST_DIR / 'e2e_helper.py'), 'publish', '--out', str(pub_json),
+    publisher = _noble(['-m', 'contact_detector.ros.live_trial', 'publish', '--out', str(pub_json),
                         '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
     try:
         publisher.wait(timeout=75)

@@ -13,7 +13,11 @@
 # limitations under the License.
 
 """
-Processes of the multi-process node test and benchmark.
+A simulated trial played live into the node, and a listener of its outputs: two processes.
+
+Used by the multi-process test (test/e2e/), the Ubuntu 24.04 test and
+``benchmarks/bench_node.py``, each as its own process, so the node is measured against real DDS
+traffic.
 
 ``publish``: plays a simulated trial at the real rate on ``wrist_wrench`` and ``audio``, its
 times shifted to the wall clock, once the node and the listener are up. Writes the shift, the
@@ -22,8 +26,8 @@ true onset and the exogenous impacts (wall time) and every audio publish time as
 ``listen``: records the wall time of every ``contact``, ``contact_probability`` and ``release``
 message until ``--stop-file`` appears (or ``--max-s``), then writes JSON.
 
-    python test/e2e_helper.py publish --out pub.json [--seed 3 --index 21 --hits hand]
-    python test/e2e_helper.py listen --out listen.json --stop-file stop
+    python -m contact_detector.ros.live_trial publish --out pub.json [--seed 3 --index 21]
+    python -m contact_detector.ros.live_trial listen --out listen.json --stop-file stop
 """
 
 import argparse
@@ -31,38 +35,39 @@ import json
 from pathlib import Path
 import sys
 import time
+from typing import Optional, Sequence
 
+from contact_detector.sim.messages import message_events
+from contact_detector.sim.trial import simulate_trial
 import rclpy
 from rclpy.qos import qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
 
 def _stamp(t: float):
+    """Return a ``builtin_interfaces/Time`` of ``t`` seconds."""
     from builtin_interfaces.msg import Time
     sec = int(t)
     return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
 
 
 def _wait(node, predicate, timeout: float, what: str) -> None:
+    """Spin ``node`` until ``predicate()`` holds; exit with a message after ``timeout`` s."""
     end = time.monotonic() + timeout
     while not predicate():
         if time.monotonic() > end:
-            raise SystemExit(f'e2e_helper: timed out waiting for {what}')
+            raise SystemExit(f'live_trial: timed out waiting for {what}')
         rclpy.spin_once(node, timeout_sec=0.05)
 
 
 def publish(args: argparse.Namespace) -> None:
+    """Play one simulated trial at its real rate, then write what was sent (JSON)."""
     from geometry_msgs.msg import WrenchStamped
     from std_msgs.msg import Int16MultiArray
-
-    from contact_detector.sim.trial import simulate_trial
-    import node_support
 
     trial = simulate_trial(seed=args.seed, index=args.index, hits=args.hits,
                            audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                            chunk_size=args.chunk or None)
-    events = node_support.trial_events(trial)
+    events = message_events(trial=trial)
     if args.seconds:
         events = [e for e in events if e.t < trial.start_time + args.seconds]
     if args.after_onset:
@@ -122,6 +127,7 @@ def publish(args: argparse.Namespace) -> None:
 
 
 def listen(args: argparse.Namespace) -> None:
+    """Record the wall time of every output message until the stop file appears (JSON)."""
     from std_msgs.msg import Bool, Float32
 
     rclpy.init()
@@ -154,7 +160,8 @@ def listen(args: argparse.Namespace) -> None:
     rclpy.try_shutdown()
 
 
-def main() -> None:
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run ``publish`` or ``listen``; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest='cmd', required=True)
@@ -178,9 +185,13 @@ def main() -> None:
     lis.add_argument('--max-s', type=float, default=120.0)
     lis.add_argument('--ready-file', default='',
                      help="touched once every subscription has matched the node's publishers")
-    args = parser.parse_args()
-    publish(args) if args.cmd == 'publish' else listen(args)
+    args = parser.parse_args(argv)
+    if args.cmd == 'publish':
+        publish(args)
+    else:
+        listen(args)
+    return 0
 
 
 if __name__ == '__main__':
-    main()
+    sys.exit(main())
