@@ -22,6 +22,7 @@ import argparse
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.rule import DecisionRule
+from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA,
                                               DEFAULT_LABELS, DEFAULT_RULE)
 
@@ -120,3 +121,22 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          change_max_frames=args.change_max_frames,
                          shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
                          shift_window=args.shift_window, extra_features=extra)
+
+
+def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the wrench-augmentation ranges shared by train and sweep."""
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability,
+                        help='augmentation: probability of a tared sensor (default '
+                             f'{WrenchAugmentation.tare_probability})')
+    parser.add_argument('--augment-torque', type=scale_range,
+                        default=WrenchAugmentation.torque_scale,
+                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
+                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
+                             f'{WrenchAugmentation.torque_scale[1]:g})')
+
+
+def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
+    """Return the augmentation the options name (raises ConfigError on a bad range)."""
+    return WrenchAugmentation(tare_probability=args.augment_tare,
+                              torque_scale=tuple(args.augment_torque))

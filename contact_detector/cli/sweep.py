@@ -47,12 +47,14 @@ from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
+from contact_detector.cli.model_options import (add_augmentation_arguments,
+                                                augmentation_from_args)
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
-from contact_detector.training.augmentation import AUGMENTED, scale_range, WrenchAugmentation
+from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE)
@@ -101,15 +103,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              f'; NAME{AUGMENTED}: the forests train on augmented wrenches, '
                              'see --augment-tare; the left-out family is never augmented)')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
-    parser.add_argument('--augment-tare', type=float,
-                        default=WrenchAugmentation.tare_probability,
-                        help='augmentation: probability of a tared sensor (default '
-                             f'{WrenchAugmentation.tare_probability})')
-    parser.add_argument('--augment-torque', type=scale_range,
-                        default=WrenchAugmentation.torque_scale,
-                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
-                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
-                             f'{WrenchAugmentation.torque_scale[1]:g})')
+    add_augmentation_arguments(parser)
     parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
                         help='--lofo: frames from this long after the onset are labelled '
                              f'contact, s (default {STATE.start_s})')
@@ -155,8 +149,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     if args.lofo:
         try:
-            augmentation = WrenchAugmentation(tare_probability=args.augment_tare,
-                                              torque_scale=tuple(args.augment_torque))
+            augmentation = augmentation_from_args(args)
         except ContactDetectorError as err:
             parser.error(str(err))
         trials = {}

@@ -39,14 +39,14 @@ import tempfile
 from typing import Optional, Sequence
 
 from contact_detector.cli.common import add_stream_arguments, discover_all
-from contact_detector.cli.model_options import (add_feature_arguments, config_from_args,
-                                                rule_from_args, tree_counts)
+from contact_detector.cli.model_options import (add_augmentation_arguments,
+                                                add_feature_arguments, augmentation_from_args,
+                                                config_from_args, rule_from_args, tree_counts)
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow, read_labels_csv, unlabelled_bags
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, simulated_trials,
                                               train_model, training_sources)
@@ -81,15 +81,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="vary each trial's wrench before its features: other lever arms "
                              'and tared sensors (docs/model.md); drawn from --seed and the '
                              'bag name')
-    parser.add_argument('--augment-tare', type=float,
-                        default=WrenchAugmentation.tare_probability,
-                        help='augmentation: probability of a tared sensor (default '
-                             f'{WrenchAugmentation.tare_probability})')
-    parser.add_argument('--augment-torque', type=scale_range,
-                        default=WrenchAugmentation.torque_scale,
-                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
-                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
-                             f'{WrenchAugmentation.torque_scale[1]:g})')
+    add_augmentation_arguments(parser)
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
@@ -166,9 +158,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             found=found, user_bags=user_bags, csv_onsets=csv_onsets, manifest=manifest,
             sources=sources, config=config, labels=labels, rule=rule, trees=args.trees,
             seed=args.seed, jobs=args.jobs, events=not args.no_events,
-            augmentation=(WrenchAugmentation(tare_probability=args.augment_tare,
-                                             torque_scale=tuple(args.augment_torque))
-                          if args.augment else None),
+            augmentation=(augmentation_from_args(args) if args.augment else None),
             created=datetime.now(timezone.utc).isoformat(timespec='seconds'),
             progress=lambda items, desc: tqdm(items, desc=desc, unit='bag'), step=step,
             log=print)

@@ -300,12 +300,13 @@ def test_iter_messages_reads_ros1_with_and_without_fast_decoders(tmp_path):
     assert np.array_equal(audio, trial.audio[:audio.size]) and audio.size == trial.audio.size
 
 
-def test_200_hz_ros1_bags_without_flags_decide_as_with_the_settings_by_hand(tmp_path, capsys):
-    """Recordings as users have them: ROS 1, 200 Hz F/T, no rate anywhere in the bag."""
-    folder = tmp_path / 'robot'
-    for index in range(3):
-        trial = simulate_trial(seed=31, index=index, ft_rate=200.0)
-        write_trial_bag(trial=trial, path=folder / f'place_{index}', storage='ros1')
+def detect_found_and_by_hand(folder: Path, tmp_path: Path, capsys) -> tuple:
+    """
+    Run ``detect`` on three 200 Hz ROS 1 bags without flags, then with the settings by hand.
+
+    Checks that the run without flags found the rate from the stamps and estimated the audio
+    rate; returns the two JSONL outputs (found, by hand).
+    """
     found, by_hand = tmp_path / 'found.jsonl', tmp_path / 'by_hand.jsonl'
     assert detect_cli.main([str(folder), '--out', str(found)]) == 0
     printed = capsys.readouterr().out
@@ -314,6 +315,16 @@ def test_200_hz_ros1_bags_without_flags_decide_as_with_the_settings_by_hand(tmp_
     assert detect_cli.main([str(folder), '--wrench-topic', '/wrist_wrench', '--audio-topic',
                             '/audio', '--audio-rate', '16000', '--wrench-rate', '200',
                             '--out', str(by_hand)]) == 0
+    return found, by_hand
+
+
+def test_200_hz_ros1_bags_without_flags_decide_as_with_the_settings_by_hand(tmp_path, capsys):
+    """Recordings as users have them: ROS 1, 200 Hz F/T, no rate anywhere in the bag."""
+    folder = tmp_path / 'robot'
+    for index in range(3):
+        trial = simulate_trial(seed=31, index=index, ft_rate=200.0)
+        write_trial_bag(trial=trial, path=folder / f'place_{index}', storage='ros1')
+    found, by_hand = detect_found_and_by_hand(folder, tmp_path, capsys)
     rows = _rows(found)
     assert rows == _rows(by_hand)
     assert sum(row.get('event') == 'release' for row in rows) == 3

@@ -18,12 +18,12 @@ import dataclasses
 import json
 from pathlib import Path
 
-from contact_detector.cli import detect as detect_cli
 from contact_detector.io.discovery import discover_streams
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
 import numpy as np
 import pytest
+from test_discovery import detect_found_and_by_hand
 
 pytestmark = pytest.mark.slow   # writes and reads many bags, runs detect
 
@@ -46,14 +46,7 @@ def test_quiet_200_hz_ros1_bags_decide_without_flags_as_with_them(tmp_path, caps
         found = discover_streams(bag)
         assert abs(found.wrench_rate - 200.0) < 0.5 and found.wrench_rate_source == 'stamps'
         assert (found.audio_rate, found.audio_rate_source) == (16000.0, 'estimated')
-    by_flags, by_hand = tmp_path / 'found.jsonl', tmp_path / 'by_hand.jsonl'
-    assert detect_cli.main([str(folder), '--out', str(by_flags)]) == 0
-    printed = capsys.readouterr().out
-    assert '3 bags: wrench /wrist_wrench at 200 Hz (stamps)' in printed
-    assert '16000 Hz, 1 ch (estimated)' in printed
-    assert detect_cli.main([str(folder), '--wrench-topic', '/wrist_wrench', '--audio-topic',
-                            '/audio', '--audio-rate', '16000', '--wrench-rate', '200',
-                            '--out', str(by_hand)]) == 0
+    by_flags, by_hand = detect_found_and_by_hand(folder, tmp_path, capsys)
     rows = _rows(by_flags)
     assert len(rows) > 300 and rows == _rows(by_hand)
     assert {row['bag'] for row in rows} == {bag.name for bag in bags}

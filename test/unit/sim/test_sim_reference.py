@@ -27,6 +27,7 @@ data sets (bags and manifest) see ``tools/sim_digest.py``.
 
 import hashlib
 import json
+import os
 import platform
 import sys
 
@@ -102,7 +103,10 @@ def test_simulated_trials_are_bit_identical_to_the_reference():
 def test_real_sounds_trial_is_bit_identical_to_the_reference():
     _skip_unless_recorded_here()
     if not sound_bank.bank_available():
-        pytest.skip(f'the real sound bank is not in {sound_bank.bank_dir()}')
+        why = f'the real sound bank is not in {sound_bank.bank_dir()} ({sound_bank.FETCH_COMMAND})'
+        if os.environ.get('CI'):
+            pytest.fail(why + ' -- CI must have it')    # tools/setup.sh fetches it
+        pytest.skip(why)
     if sound_bank.load_bank().fingerprint != RECORDED_BANK:
         pytest.skip('another sound bank than the one the digest was recorded with')
     trial = simulate_trial(seed=SEED, index=13, condition='real_sounds')
