@@ -73,6 +73,9 @@ class Outcome:
     impacts: int = 0
     impacts_in_air: int = 0
     extra: dict = field(default_factory=dict)
+    # What a premature release followed: the kind of the newest exogenous event that started
+    # at most IMPACT_WINDOW_S[1] before it ('hand', 'touch', 'brush', ...), or 'none'.
+    premature_after: Optional[str] = None
 
 
 def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[float],
@@ -108,6 +111,9 @@ def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[flo
         verdict, latency = 'late', release - truth.onset_t
     contact_end = truth.contact_end_t if truth.contact_end_t is not None else (
         truth.onset_t + late_s)
+    cause = None
+    if verdict == 'premature':
+        cause = premature_cause(truth=truth, release_t=release)
     blamed = 0
     for t in events:
         if truth.onset_t - tolerance_s <= t <= contact_end:
@@ -118,7 +124,33 @@ def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[flo
     return Outcome(name=truth.name, condition=truth.condition, onset_t=truth.onset_t,
                    release_t=release, latency_s=latency, verdict=verdict, impact_events=blamed,
                    impacts=len(truth.impacts),
-                   impacts_in_air=sum(1 for _, _, air in truth.impacts if air))
+                   impacts_in_air=sum(1 for _, _, air in truth.impacts if air),
+                   premature_after=cause)
+
+
+def premature_cause(*, truth: Truth, release_t: float) -> str:
+    """
+    Name the exogenous event a premature release followed.
+
+    Parameters
+    ----------
+    truth : Truth
+        Ground truth with its exogenous impacts.
+    release_t : float
+        The premature release, seconds.
+
+    Returns
+    -------
+    str
+        The kind of the newest impact that started in ``[release_t - 0.5 s, release_t +
+        0.05 s]`` (:data:`IMPACT_WINDOW_S`, the window that blames contact events on impacts),
+        or ``'none'`` when the release followed no event: the detector fired on the approach
+        itself.
+
+    """
+    kinds = [(t, kind) for t, kind, _ in truth.impacts
+             if t + IMPACT_WINDOW_S[0] <= release_t <= t + IMPACT_WINDOW_S[1]]
+    return max(kinds)[1] if kinds else 'none'
 
 
 def score_onsets(*, name: str, condition: str, onsets: Sequence[float],
@@ -196,8 +228,27 @@ def summarize(outcomes: Sequence[Outcome]) -> Dict[str, object]:
         'latency_ms_median': float(np.median(latencies) * 1000) if latencies.size else None,
         'latency_ms_p95': float(np.percentile(latencies, 95) * 1000) if latencies.size else None,
         'latency_ms_max': float(latencies.max() * 1000) if latencies.size else None,
+        'premature_after': premature_counts(outcomes),
     }
     return summary
+
+
+def premature_counts(outcomes: Sequence[Outcome]) -> Dict[str, int]:
+    """Count premature releases by the event they followed (:func:`premature_cause`)."""
+    counts: Dict[str, int] = {}
+    for o in outcomes:
+        if o.verdict == 'premature':
+            key = o.premature_after or 'none'
+            counts[key] = counts.get(key, 0) + 1
+    return dict(sorted(counts.items()))
+
+
+def premature_text(summary: Dict[str, object]) -> str:
+    """Return ``summary``'s premature count with its causes, e.g. ``'3 (brush 2, touch 1)'``."""
+    causes = summary.get('premature_after') or {}
+    if not causes:
+        return str(summary['premature'])
+    return f"{summary['premature']} ({', '.join(f'{k} {v}' for k, v in causes.items())})"
 
 
 def summarize_by_condition(outcomes: Sequence[Outcome]) -> Dict[str, Dict[str, object]]:

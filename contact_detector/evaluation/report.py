@@ -18,7 +18,7 @@ import json
 from pathlib import Path
 from typing import Dict
 
-from contact_detector.evaluation.metrics import LATE_S, ONSET_TOLERANCE_S
+from contact_detector.evaluation.metrics import LATE_S, ONSET_TOLERANCE_S, premature_text
 import numpy as np
 
 #: recordings drawn in recordings.png at most
@@ -126,13 +126,13 @@ def plot_recordings(*, path: Path, results: Dict[str, dict]) -> int:
 
 
 def condition_table(result: dict) -> str:
-    """Per-condition breakdown of one detector."""
-    lines = ['| condition | trials | detected | missed | late | premature | latency median '
-             '[ms] | impact events |', '|---|---|---|---|---|---|---|---|']
+    """Per-condition breakdown of one detector; premature releases with what they followed."""
+    lines = ['| condition | trials | detected | missed | late | premature (after) | '
+             'latency median [ms] | impact events |', '|---|---|---|---|---|---|---|---|']
     for condition, s in result['summary'].items():
         median = '-' if s['latency_ms_median'] is None else f"{s['latency_ms_median']:.0f}"
         lines.append(f"| {condition} | {s['trials']} | {s['detected']} | {s['missed']} | "
-                     f"{s['late']} | {s['premature']} | {median} | {s['impact_events']} |")
+                     f"{s['late']} | {premature_text(s)} | {median} | {s['impact_events']} |")
     return '\n'.join(lines)
 
 

@@ -25,6 +25,7 @@ compares and how its table reads.
 from dataclasses import replace
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
+from contact_detector.evaluation.metrics import premature_text
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
@@ -215,11 +216,12 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
             wrench_rate=wrench_rate, jobs=jobs, augmentation=augmentation,
             seed=seed).values())
     rules = lofo_rules()
-    worst_lines = ['| setting | rule | worst family | detected | premature | median [ms] | '
-                   'p95 [ms] | all families: detected / premature |',
+    worst_lines = ['| setting | rule | worst family | detected | premature (after) | '
+                   'median [ms] | p95 [ms] | all families: detected / premature |',
                    '|---|---|---|---|---|---|---|---|']
-    family_lines = ['| setting | rule | family | detected | premature | impact events | '
-                    'median [ms] | p95 [ms] |', '|---|---|---|---|---|---|---|---|']
+    family_lines = ['| setting | rule | family | detected | premature (after) | '
+                    'impact events | median [ms] | p95 [ms] |',
+                    '|---|---|---|---|---|---|---|---|']
     for name in progress(settings):
         augmented = name.endswith(AUGMENTED)
         columns = (LOFO_SETTINGS[name.removesuffix(AUGMENTED)]
@@ -235,7 +237,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                 s = dict(fold.rows[k].summary, family=fold.family)
                 summaries.append(s)
                 family_lines.append(f'| {name} | {rule.short()} | {fold.family} | '
-                                    f"{s['detected']}/{s['trials']} | {s['premature']} | "
+                                    f"{s['detected']}/{s['trials']} | {premature_text(s)} | "
                                     f"{s['impact_events']} | {_ms(s['latency_ms_median'])} | "
                                     f"{_ms(s['latency_ms_p95'])} |")
             w = worst_family(summaries)
@@ -245,7 +247,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
             trials_n = sum(s['trials'] for s in summaries)
             early = sum(s['premature'] for s in summaries)
             worst_lines.append(f"| {name} | {rule.short()} | {w['family']} | "
-                               f"{w['detected']}/{w['trials']} | {w['premature']} | "
+                               f"{w['detected']}/{w['trials']} | {premature_text(w)} | "
                                f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
                                f'{total}/{trials_n} / {early} |')
     return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
