@@ -30,7 +30,8 @@ misses, premature releases, latency, contact events blamed on exogenous impacts,
 precision/recall. With ``--ablation`` it also trains on all condition sets but one and tests on
 the one left out (heavy, soft, noisy, gain), for the settings that are meant to generalise.
 ``--seeds 0,1,2,3`` trains one forest per seed for the grid and the ablation and sums the
-counts over the seeds (latency: the median of the per-seed medians): a 10-tree forest is a
+counts over the seeds (latency: the median of the per-seed medians); with ``--lofo`` every fold
+trains one forest per seed and each family's row pools their outcomes: a 10-tree forest is a
 noisy estimator, and one forest cannot tell two close settings apart.
 
 With ``--model`` no forest is trained: the rules (the model's own, the threshold x
@@ -121,7 +122,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--seeds', type=seed_list, default=None, metavar='LIST',
                         help='forest seeds, comma-separated: grid and ablation summed over '
-                             'one forest per seed (default: --seed alone)')
+                             'one forest per seed, --lofo pools each family over them '
+                             '(default: --seed alone)')
     parser.add_argument('--model', type=Path, default=None,
                         help='score the rules with this trained model instead of training')
     parser.add_argument('--own-test', type=Path, default=None, metavar='TRAIN_DIR',
@@ -157,7 +159,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             trials.update(decode(find_bags([folder]), spec, f'{i}'))
         output = lofo_study(trials=trials, settings=args.lofo_settings.split(','),
                             label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
-                            label_start_s=args.lofo_label_start,
+                            label_start_s=args.lofo_label_start, seeds=args.seeds or (),
                             augmentation=augmentation,
                             audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
                             jobs=args.jobs,

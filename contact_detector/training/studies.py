@@ -25,7 +25,7 @@ compares and how its table reads.
 from dataclasses import replace
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
-from contact_detector.evaluation.metrics import premature_text
+from contact_detector.evaluation.metrics import premature_text, summarize
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
@@ -195,6 +195,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
                label_start_s: float = 0.0,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
+               seeds: Sequence[int] = (),
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
     Leave-one-family-out over the pooled trials; per setting and rule the worst family.
@@ -204,7 +205,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     shipped one with every extra feature) computed once per trial. A name ending in
     :data:`~contact_detector.training.augmentation.AUGMENTED` (``shipped+aug``) trains the
     forests on the same trials with their wrenches varied by ``augmentation`` (drawn from
-    ``seed`` and each trial's name); the left-out family is never augmented. Returns markdown.
+    ``seed`` and each trial's name); the left-out family is never augmented. With ``seeds``,
+    every fold trains one forest per seed and each family's row pools the outcomes of all of
+    them (``n`` trials x ``len(seeds)``), so that two settings are not told apart by one
+    forest's randomness; else one forest of ``seed``. Returns markdown.
     """
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
     frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=audio_rate,
@@ -228,15 +232,20 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                    or DEFAULT_FEATURES.feature_names)
         setting = FeatureSetting(name, config, LabelWindow(label_start_s, label_end_s),
                                  columns=tuple(columns))
-        folds = leave_one_family_out(frames=frames, setting=setting, rules=rules,
-                                     n_estimators=trees, seed=seed, jobs=jobs,
-                                     fit_frames=fit_frames if augmented else None)
+        pooled: Dict[tuple, list] = {}
+        for forest_seed in (seeds or (seed,)):
+            for fold in leave_one_family_out(frames=frames, setting=setting, rules=rules,
+                                             n_estimators=trees, seed=forest_seed, jobs=jobs,
+                                             fit_frames=fit_frames if augmented else None):
+                for k, row in enumerate(fold.rows):
+                    pooled.setdefault((k, fold.family), []).extend(row.outcomes)
+        families = sorted({family for _, family in pooled})
         for k, rule in enumerate(rules):
             summaries = []
-            for fold in folds:
-                s = dict(fold.rows[k].summary, family=fold.family)
+            for family in families:
+                s = dict(summarize(pooled[(k, family)]), family=family)
                 summaries.append(s)
-                family_lines.append(f'| {name} | {rule.short()} | {fold.family} | '
+                family_lines.append(f'| {name} | {rule.short()} | {family} | '
                                     f"{s['detected']}/{s['trials']} | {premature_text(s)} | "
                                     f"{s['impact_events']} | {_ms(s['latency_ms_median'])} | "
                                     f"{_ms(s['latency_ms_p95'])} |")

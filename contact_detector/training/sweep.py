@@ -73,6 +73,7 @@ class SweepRow:
     precision: float
     recall: float
     extra: dict = field(default_factory=dict)
+    outcomes: tuple = ()    # the per-trial Outcomes behind ``summary``
 
 
 def decode_bags(*, bags: Sequence[Path], spec: StreamSpec, tag: str,
@@ -233,7 +234,7 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
         rows.append(SweepRow(setting=setting.name,
                              rule=rule.short(),
                              summary=summarize(outcomes), precision=precision,
-                             recall=recall))
+                             recall=recall, outcomes=tuple(outcomes)))
     return rows
 
 

@@ -631,6 +631,31 @@ def test_sweep_lofo_scores_each_family_plain_and_augmented(data, tmp_path):
     assert all(r[2] in families for r in rows(worst_part))
 
 
+def test_sweep_lofo_pools_each_family_over_the_forest_seeds(data, tmp_path):
+    bags = str(data['bags'])
+    tables = {}
+    for seeds in ('3', '3,4'):
+        out = tmp_path / f'lofo{seeds}.md'
+        assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
+                               '--jobs', '1', '--seeds', seeds, '--out', str(out)]) == 0
+        family_part = out.read_text().split('## Every family')[1]
+        tables[seeds] = {(r[1], r[2]): r for r in (
+            [c.strip() for c in line.strip('|').split('|')]
+            for line in family_part.splitlines() if line.startswith('| shipped'))}
+    per_family = {}
+    for t in data['trials'].values():
+        per_family[t.condition] = per_family.get(t.condition, 0) + 1
+    assert tables['3'].keys() == tables['3,4'].keys()
+    for (rule, family), row in tables['3,4'].items():
+        one = tables['3'][rule, family]
+        # a family's row is out of its trials once per forest; seed 3's forests are the same
+        # in both runs, so the pooled row holds at least what seed 3 alone caught
+        assert int(one[3].split('/')[1]) == per_family[family]
+        assert int(row[3].split('/')[1]) == 2 * per_family[family]
+        assert int(row[3].split('/')[0]) >= int(one[3].split('/')[0])
+        assert int(row[4].split()[0]) >= int(one[4].split()[0])
+
+
 def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, tmp_path,
                                                                           capsys):
     model = tmp_path / 'aug.npz'
