@@ -21,6 +21,7 @@ Load-change features of |F| and |T|: window means and medians, vector shifts, ch
 evaluates them on its window (see docs/features.md).
 """
 
+from contact_detector.features.buffers import column_windows
 import numpy as np
 
 
@@ -77,14 +78,13 @@ def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.nd
     -------
     np.ndarray, shape (m,) or (m, c)
         ``np.median``'s values: the middle order statistic, or the mean of the two middle ones
-        for an even ``window``. Each window is gathered column by column (contiguous) and
+        for an even ``window``. Each window is copied column by column (contiguous) and
         sorted in place: a third of the cost of a two-element ``np.partition`` along a strided
         axis for a recording's windows, and no more for one. Order statistics are exact, so
         the method does not change a bit.
 
     """
-    index = ends[:, None] + np.arange(1 - window, 1)
-    ordered = signal.T[:, index] if signal.ndim == 2 else signal[index]    # (c, m, w) or (m, w)
+    ordered = column_windows(signal=signal, ends=ends, window=window)    # (c, m, w) or (m, w)
     ordered.sort(axis=-1)
     k = window // 2
     middle = ordered[..., k] if window % 2 else (ordered[..., k - 1] + ordered[..., k]) / 2
