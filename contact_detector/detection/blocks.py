@@ -17,7 +17,7 @@ A whole recording through the detector in a few array operations, bit-identical 
 
 :func:`contact_detector.detection.offline.run_detector` feeds a recording to
 :class:`~contact_detector.detection.detector.ContactDetector` one message at a time, as the node
-does: ~180 us of Python and numpy per 10 ms of sensor data, i.e. ~50x real time. This module
+does: ~260 us of Python and numpy per 10 ms of sensor data, i.e. 35-40x real time. This module
 computes the same :class:`Decisions` for a *clean* recording in blocks:
 
 1. one cheap scalar pass over the messages repeats every check and every piece of state the
