@@ -17,7 +17,7 @@ A whole recording through the detector in a few array operations, bit-identical 
 
 :func:`contact_detector.detection.offline.run_detector` feeds a recording to
 :class:`~contact_detector.detection.detector.ContactDetector` one message at a time, as the node
-does: ~180 us of Python and numpy per 10 ms of sensor data, i.e. ~50x real time. This module
+does: ~260 us of Python and numpy per 10 ms of sensor data, i.e. 35-40x real time. This module
 computes the same :class:`Decisions` for a *clean* recording in blocks:
 
 1. one cheap scalar pass over the messages repeats every check and every piece of state the
@@ -52,8 +52,12 @@ from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
 import numpy as np
 
-#: Audio frames per power block (bounds the frame matrix: 4096 x 1536 x 8 B = 50 MB at 48 kHz).
+#: Audio frames per power block (bounds the frame matrix: 4096 x 1536 x 8 B = 50 MB at 48 kHz)
+#: where the frame starts have no short period (see :func:`_frame_powers`).
 POWER_BLOCK = 4096
+_INT16, _FLOAT64 = np.dtype(np.int16), np.dtype(np.float64)
+#: Longest period of the frame starts' pattern looked for (4 covers 11.025 kHz: 110.25 samples).
+PATTERN_PERIODS = 8
 
 
 @dataclass
@@ -154,12 +158,12 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
         return None
     if ex.ft_only:
         return _ft_only_features(scan, extractor=ex)
-    (nows, audio_idx, chunks, stamps, wrench_idx, wt, wforce, wtorque, per_msg, _) = scan
+    (nows, audio_idx, samples, sizes, stamps, wrench_idx, wt, wforce, wtorque, per_msg,
+     _) = scan
     framer, fs = ex.audio, ex.audio.sample_rate
     n_events = nows.size
 
     # --- audio: anchors and frames, exactly as AudioFramer.push per chunk -------------------
-    sizes = np.array([c.shape[0] for c in chunks], dtype=np.int64)
     cum = np.cumsum(sizes)
     anchors = _anchors(sizes=sizes, stamps=stamps, framer=framer)
     if anchors is None:
@@ -175,13 +179,11 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
     arrival = latest[chunk_of]
     if not (np.all(np.diff(t) > 0) and np.all(np.diff(latest) >= 0)):
         return None         # a time anchor that moved back by more than a hop: per message
-    clipped = sum(1 for u in chunks if float(np.max(np.abs(u))) >= CLIP_LEVEL)
-    samples = np.concatenate(chunks) if chunks else np.zeros(0)
-    power = np.empty(ends.size)
-    for lo in range(0, ends.size, POWER_BLOCK):
-        block = ends[lo:lo + POWER_BLOCK]
-        power[lo:lo + block.size] = spectral.audio_power(
-            frames=samples[(block - w)[:, None] + framer._offsets])
+    # Chunks are never empty (checked by the scan); a maximum is exact, grouped or not.
+    clipped = (int(np.count_nonzero(np.maximum.reduceat(np.abs(samples), cum - sizes)
+                                    >= CLIP_LEVEL)) if sizes.size else 0)
+    power = _frame_powers(samples=samples, starts=ends - w, frame_length=w,
+                          offsets=framer._offsets)
     per_frame = ex.levels.rows(power)
     audio = np.array(per_frame) if per_frame else np.zeros((0, len(AUDIO_FEATURES)))
 
@@ -231,9 +233,42 @@ def block_features(events: List[Event], *, extractor: StreamingFeatureExtractor,
                          clipped=clipped)
 
 
+def _frame_powers(*, samples: np.ndarray, starts: np.ndarray, frame_length: int,
+                  offsets: np.ndarray) -> np.ndarray:
+    """
+    :func:`spectral.audio_power` of the frames ``samples[s:s + frame_length]``, ``s`` in starts.
+
+    Frame starts follow a pattern of period ``q`` (``floor(i * hop + 0.5)``; ``q = 1`` for a
+    hop of a whole number of samples, 2 for 220.5 samples, ...): the frames of each phase
+    ``r`` are then evenly spaced, a strided view of ``samples`` with contiguous rows, and
+    ``audio_power`` runs on the view, without copying every frame. Each row's sum runs over
+    the same contiguous samples as on the live path's copy, so the bits are the same
+    (``test_blocks.py``). Starts without such a short period are gathered in blocks of
+    :data:`POWER_BLOCK` frames.
+    """
+    n = starts.size
+    power = np.empty(n)
+    stride = samples.strides[0]
+    for period in range(1, min(PATTERN_PERIODS, n) + 1):
+        steps = [np.diff(starts[r::period]) for r in range(period)]
+        if all(np.all(d == d[0]) for d in steps if d.size):
+            for r in range(period):
+                first = starts[r::period]
+                step = int(steps[r][0]) if steps[r].size else 1
+                view = np.lib.stride_tricks.as_strided(
+                    samples[first[0]:], shape=(first.size, frame_length),
+                    strides=(step * stride, stride), writeable=False)
+                power[r::period] = spectral.audio_power(frames=view)
+            return power
+    for lo in range(0, n, POWER_BLOCK):
+        block = starts[lo:lo + POWER_BLOCK]
+        power[lo:lo + block.size] = spectral.audio_power(frames=samples[block[:, None] + offsets])
+    return power
+
+
 def _ft_only_features(scan: tuple, *, extractor: StreamingFeatureExtractor) -> BlockFeatures:
     """Every row of an F/T-only extractor: one per F/T feature frame, emitted by its sample."""
-    (nows, audio_idx, _, _, wrench_idx, wt, wforce, wtorque, per_msg, ignored) = scan
+    (nows, audio_idx, _, _, _, wrench_idx, wt, wforce, wtorque, per_msg, ignored) = scan
     ex = extractor
     if wt.size:
         ft_t, ft_x = ex.ft.push(t=wt, force=wforce, torque=wtorque)
@@ -253,13 +288,18 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
     """
     Split the messages by kind, repeating the live per-message checks; None if not clean.
 
+    The audio comes back as one array of unit samples and the size of each chunk: int16
+    chunks (what bags hold) are scaled in one :func:`to_unit_audio` call over all of them,
+    which is the same division per sample; any other chunk is checked and scaled on its own.
     ``audio`` False (an F/T-only extractor): audio messages, sound or refused, are not pushed
     and not checked; the last element of the tuple counts them.
     """
     nows = []
-    audio_idx, chunks, stamps = [], [], []
+    audio_idx, chunks, sizes, stamps = [], [], [], []
+    all_int16 = True
     wrench_idx, wt, wforce, wtorque, per_msg = [], [], [], [], []
     ignored = 0
+    isfinite = math.isfinite
     for event in events:
         if not audio and (isinstance(event, AudioEvent)
                           or (isinstance(event, BadEvent) and event.kind == 'audio')):
@@ -268,24 +308,30 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
                 audio_idx.append(-1)        # counted as a message, never pushed
             continue
         if isinstance(event, AudioEvent):
-            stamp = event.stamp
-            try:
-                unit = to_unit_audio(event.samples)      # the live path's own check
-            except InputError:
+            stamp, samples = event.stamp, event.samples
+            if type(samples) is np.ndarray and samples.dtype == _INT16 and samples.ndim == 1:
+                unit = samples              # scaled with all the others below
+            else:
+                all_int16 = False
+                try:
+                    unit = to_unit_audio(samples)    # the live path's own check
+                except InputError:
+                    return None
+            n = unit.shape[0]
+            if not (n and isinstance(stamp, float) and isfinite(stamp)):
                 return None
-            if not (unit.size and isinstance(stamp, float) and math.isfinite(stamp)):
-                return None
-            if rate is not None and rate.update(n=unit.shape[0], stamp=stamp) is not None:
+            if rate is not None and rate.update(n=n, stamp=stamp) is not None:
                 return None
             audio_idx.append(len(nows))
             chunks.append(unit)
+            sizes.append(n)
             stamps.append(stamp)
         elif isinstance(event, WrenchEvent):
             t, force, torque = event.t, event.force, event.torque
             if not (isinstance(t, np.ndarray) and t.ndim == 1 and t.size
-                    and t.dtype == np.float64 and force.shape == (t.size, 3)
-                    and torque.shape == (t.size, 3) and force.dtype == np.float64
-                    and torque.dtype == np.float64):
+                    and t.dtype == _FLOAT64 and force.shape == (t.size, 3)
+                    and torque.shape == (t.size, 3) and force.dtype == _FLOAT64
+                    and torque.dtype == _FLOAT64):
                 return None
             wrench_idx.append(len(nows))
             wt.append(t)
@@ -297,6 +343,12 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
         else:
             continue                        # truth (or a skipped refusal): never pushed
         nows.append(event.now)
+    if not chunks:
+        samples = np.zeros(0)
+    elif all_int16:
+        samples = to_unit_audio(np.concatenate(chunks))
+    else:
+        samples = np.concatenate([to_unit_audio(c) for c in chunks])
     if wt:
         t = np.concatenate(wt)
         force, torque = np.concatenate(wforce), np.concatenate(wtorque)
@@ -309,7 +361,8 @@ def _scan(events: List[Event], *, rate: Optional[AudioRateCheck], gap: float,
     else:
         t, force, torque = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
     return (np.array(nows, dtype=np.float64),
-            np.array(audio_idx, dtype=np.intp), chunks, np.array(stamps, dtype=np.float64),
+            np.array(audio_idx, dtype=np.intp), samples, np.array(sizes, dtype=np.int64),
+            np.array(stamps, dtype=np.float64),
             np.array(wrench_idx, dtype=np.intp), t, force, torque,
             np.array(per_msg, dtype=np.intp), ignored)
 

@@ -70,7 +70,7 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
         A fresh detector (armed as wanted).
     in_blocks : bool
         Decide a clean recording in blocks (:mod:`contact_detector.detection.blocks`: the same
-        bits, ~10x faster); False, or a recording with anything the node would drop, reset or
+        bits, ~20x faster); False, or a recording with anything the node would drop, reset or
         restart on, goes message by message.
 
     Returns

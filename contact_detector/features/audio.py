@@ -63,7 +63,9 @@ def to_unit_audio(samples: np.ndarray) -> np.ndarray:
     if arr.ndim != 1:
         raise InputError(f'audio chunk must be 1-D (mono), got shape {arr.shape}')
     if arr.dtype == np.int16:
-        return arr.astype(np.float64) / 32768.0
+        out = arr.astype(np.float64)
+        out /= 32768.0              # in place: no second array (a whole recording offline)
+        return out
     if arr.dtype.kind != 'f':
         raise InputError(f'audio chunk must be int16 or float, got dtype {arr.dtype}')
     out = arr.astype(np.float64)

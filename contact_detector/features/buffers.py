@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Bounded histories of a stream: the newest rows in preallocated storage, running maxima over them.
+Bounded histories of a stream: the newest rows in preallocated storage, windows and running maxima.
 
 Values are only stored and compared here, never computed, so results do not depend on how a
 stream was cut into chunks.
@@ -22,9 +22,6 @@ stream was cut into chunks.
 from typing import Optional
 
 import numpy as np
-
-
-_max_reduce = np.maximum.reduce
 
 
 class TailBuffer:
@@ -122,6 +119,51 @@ def running_max(*, values: np.ndarray, before: np.ndarray, window: int) -> np.nd
         return np.zeros((0, k))
     padded = np.concatenate([np.full((window - 1 - before.shape[0], k), -np.inf),
                              before, values])
-    # rows i .. i + window - 1 of padded end at new row i: one gather, one reduction
-    index = np.arange(padded.shape[0] - m, padded.shape[0])[:, None] - np.arange(window)
-    return _max_reduce(padded[index], axis=1)
+    # Rows i .. i + window - 1 of padded end at new row i. Doubling: after the loop out[i] is
+    # the maximum of the ``span`` rows from i (span the largest power of two <= window), and
+    # two overlapping spans cover the window. log2(window) whole-array steps instead of an
+    # (m, window) gather; a maximum is exact, so the grouping does not change a bit.
+    out, span = padded, 1
+    while 2 * span <= window:
+        out = np.maximum(out[:-span], out[span:])
+        span *= 2
+    rest = window - span
+    return np.maximum(out[:m], out[rest:rest + m]) if rest else out[:m]
+
+
+def column_windows(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
+    """
+    Return the ``window`` samples ending at each of ``ends``, per column, in contiguous rows.
+
+    ``out[..., i, :] = signal[ends[i] - window + 1 : ends[i] + 1]`` (transposed for a 2-D
+    signal). Evenly spaced ``ends`` (a feature frame every ``ft_hop`` samples) are copied from
+    a strided view of the columns; others (and a single window: the live case) are gathered.
+    Either way the values are copies, so what is computed on them does not depend on the path.
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n,) or (n, c)
+        Samples, oldest first.
+    ends : np.ndarray of int, shape (m,)
+        Index of the newest sample of each window, ``window - 1 <= ends < n``.
+    window : int
+        Samples per window, >= 1.
+
+    Returns
+    -------
+    np.ndarray, shape (m, window) or (c, m, window)
+        C-contiguous.
+
+    """
+    m = ends.shape[0]
+    if m > 1:
+        first, step = int(ends[0]) - window + 1, int(ends[1] - ends[0])
+        if first >= 0 and step > 0 and int(ends[-1]) < signal.shape[0] \
+                and np.all(np.diff(ends) == step):
+            cols = np.ascontiguousarray(signal.T)
+            size = cols.itemsize
+            return np.ndarray(shape=cols.shape[:-1] + (m, window), dtype=cols.dtype,
+                              buffer=cols, offset=first * size,
+                              strides=cols.strides[:-1] + (step * size, size)).copy()
+    # the gather keeps the transposed layout of signal.T: made C-contiguous after it
+    return np.ascontiguousarray(signal.T[..., ends[:, None] + np.arange(1 - window, 1)])

@@ -21,6 +21,7 @@ Load-change features of |F| and |T|: window means and medians, vector shifts, ch
 evaluates them on its window (see docs/features.md).
 """
 
+from contact_detector.features.buffers import column_windows
 import numpy as np
 
 
@@ -76,15 +77,18 @@ def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.nd
     Returns
     -------
     np.ndarray, shape (m,) or (m, c)
-        ``np.median``'s values, from one partition (``np.median`` costs ~3x as much per call).
+        ``np.median``'s values: the middle order statistic, or the mean of the two middle ones
+        for an even ``window``. Each window is copied column by column (contiguous) and
+        sorted in place: a third of the cost of a two-element ``np.partition`` along a strided
+        axis for a recording's windows, and no more for one. Order statistics are exact, so
+        the method does not change a bit.
 
     """
-    old = signal[ends[:, None] + np.arange(1 - window, 1)]
+    ordered = column_windows(signal=signal, ends=ends, window=window)    # (c, m, w) or (m, w)
+    ordered.sort(axis=-1)
     k = window // 2
-    if window % 2:
-        return np.partition(old, k, axis=1)[:, k]
-    part = np.partition(old, (k - 1, k), axis=1)
-    return (part[:, k - 1] + part[:, k]) / 2
+    middle = ordered[..., k] if window % 2 else (ordered[..., k - 1] + ordered[..., k]) / 2
+    return middle.T
 
 
 def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:

@@ -26,7 +26,7 @@ from typing import Optional, Sequence
 
 from contact_detector.errors import InputError
 from contact_detector.features import spectral
-from contact_detector.features.buffers import running_max, TailBuffer
+from contact_detector.features.buffers import column_windows, running_max, TailBuffer
 from contact_detector.features.config import (CHANGE_FEATURES, DELTA_FEATURES, FeatureConfig,
                                               PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.deltas import (vector_shift, window_mean, window_median,
@@ -82,7 +82,6 @@ class ForceTorqueStream:
         self.first_end = need - 1
         self.history = need
         self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
-        self._offsets = np.arange(n)
         wanted = set(self.use_delta)
         self._want_delta = bool(wanted & {'force_delta', 'torque_delta', 'ft_delta_angle'})
         self._want_change = bool(wanted & set(CHANGE_FEATURES))
@@ -259,12 +258,11 @@ class ForceTorqueStream:
         cfg = self.config
         n = cfg.ft_window
         m = ends.size
-        # |F| and |T| windows side by side: one DFT call for both signals.
+        # |F| and |T| windows one after the other: one DFT call for both signals. Contiguous
+        # whatever m is: numpy sums strided rows in another order, and a frame's features
+        # must not depend on how many frames one call computes.
         mags = self._mags.view
-        windows = mags[(ends - n + 1)[:, None] + self._offsets]             # (m, n, 2)
-        # Contiguous whatever m is: numpy sums strided rows in another order, and a frame's
-        # features must not depend on how many frames one call computes.
-        frames = np.ascontiguousarray(windows.transpose(2, 0, 1).reshape(2 * m, n))
+        frames = column_windows(signal=mags, ends=ends, window=n).reshape(2 * m, n)
         spectra = spectral.magnitude_spectrum(frames=frames, window_fn=cfg.ft_window_fn,
                                               detrend=cfg.ft_detrend)
         # Divided by their maxima once for both calls (each would do it again).

@@ -21,7 +21,9 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
                                        TimeJumpError)
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
+from contact_detector.features.buffers import column_windows, running_max
 from contact_detector.features.config import EXTRA_FEATURES
+from contact_detector.features.deltas import window_median
 from contact_detector.features.force_torque import ForceTorqueStream
 from hypothesis import given, settings, strategies as st
 import numpy as np
@@ -84,6 +86,41 @@ def test_mean_detrend_removes_the_static_load():
     light = spectral.magnitude_spectrum(frames=2.0 + wiggle, detrend='mean')
     heavy = spectral.magnitude_spectrum(frames=15.0 + wiggle, detrend='mean')
     np.testing.assert_allclose(light, heavy, atol=1e-12)
+
+
+# --- windows over a stream: exact values whatever the method --------------------------------
+
+@pytest.mark.parametrize('window', [1, 2, 3, 10, 15, 40, 50, 64])
+def test_running_max_is_the_maximum_of_the_newest_window_rows(window):
+    rows = np.random.default_rng(window).normal(size=(150, 2))
+    for held in sorted({0, window // 2, window - 1}):
+        out = running_max(values=rows[held:], before=rows[:held], window=window)
+        expected = [rows[max(0, i - window + 1):i + 1].max(axis=0) for i in range(held, 150)]
+        assert np.array_equal(out, np.array(expected)), held
+
+
+@pytest.mark.parametrize('window', [1, 2, 15, 40])
+@pytest.mark.parametrize('columns', [None, 2, 6])
+def test_window_median_is_numpys_median_of_each_window(window, columns):
+    shape = (120,) if columns is None else (120, columns)
+    signal = np.random.default_rng(window).normal(size=shape).round(1)   # ties too
+    for ends in (np.arange(window - 1, 120), np.arange(window + 3, 120, 5),
+                 np.array([window - 1, window + 7, 119]), np.array([119])):
+        out = window_median(signal=signal, ends=ends, window=window)
+        expected = np.array([np.median(signal[e - window + 1:e + 1], axis=0) for e in ends])
+        assert out.shape == expected.shape and np.array_equal(out, expected), ends
+
+
+def test_column_windows_are_contiguous_copies_of_the_windows():
+    signal = np.random.default_rng(5).normal(size=(90, 2))
+    for ends in (np.arange(7, 90), np.arange(7, 90, 4), np.array([7, 8, 30]), np.array([89])):
+        out = column_windows(signal=signal, ends=ends, window=8)
+        assert out.shape == (2, ends.size, 8) and out.flags['C_CONTIGUOUS']
+        for col in range(2):
+            for i, e in enumerate(ends):
+                assert np.array_equal(out[col, i], signal[e - 7:e + 1, col])
+        out[...] = 0.0                  # a copy: the stream's history is not touched
+    assert np.all(signal != 0.0)
 
 
 @pytest.mark.parametrize('lever_m', [0.1, 0.25])
