@@ -500,7 +500,8 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
     n0 = m
     if sd <= s.busy_sigma:
-        c = cusum_start(z=y / sd, start=j0, alarm_from=m, kappa=s.cusum_k, h=s.cusum_h)
+        c = cusum_start(z=y[:max(r, m) + 1] / sd, start=j0, alarm_from=m, kappa=s.cusum_k,
+                        h=s.cusum_h)
         if c is not None and c < m and t[m] - t[c] <= s.cusum_back_s:
             n0 = c
     # fast rise: the onset is within the averaging period of sample n0 (its middle); slow
