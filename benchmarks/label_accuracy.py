@@ -73,8 +73,9 @@ def main() -> int:
     print('|---|---|---|---|---|---|')
     for name, errs in [*by_family.items(), ('all', every)]:
         e = np.asarray(errs)
+        ok = int(np.sum(e <= 20))
         print(f'| {name} | {len(e)} | {np.median(e):.1f} | {np.percentile(e, 99):.1f} | '
-              f'{e.max():.1f} | {100 * np.mean(e <= 20):.0f} % |')
+              f'{e.max():.1f} | {100 * ok / len(e):.1f} % ({ok}/{len(e)}) |')
     return 0
 
 

@@ -25,8 +25,9 @@ running with ``use_sim_time:=true`` (the equivalent of ``ros2 bag play --clock``
 reset. ``--wait-for-subscribers S`` creates every publisher first and waits up to S seconds
 until each topic has a subscriber, so the start of the bag is not lost to DDS discovery (which
 can take seconds). DDS stays on this machine only if ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
-is set (the README's commands set it). The player is
-:func:`contact_detector.ros.player.replay_bag`.
+is set (the README's commands set it). A damaged bag plays up to where it is readable, with one
+warning naming the damage, as in the other commands; a bag with nothing readable is an error
+(exit status 1). The player is :func:`contact_detector.ros.player.replay_bag`.
 """
 
 import argparse

@@ -32,19 +32,26 @@ which must decide causally, this sees the whole recording and works in three ste
    before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
    the load change along it and ``sigma_y`` its MAD-based standard deviation in the baseline.
    Searching backwards from where ``y`` reaches ``fit_frac`` of the change, sample ``m`` is the
-   first after the latest run of ``quiet_s`` with every ``|y| <= k_sigma sigma_y`` (a dip
-   after an impact spike does not stop the search; an isolated noise sample does not either
-   unless a whole quiet run precedes it). If ``y`` then reaches ``rise_k k_sigma sigma_y``
-   within ``fast_samples`` samples (a stiff contact) the onset is the middle of sample
-   ``m``'s averaging period, ``t_m - dt / 2``. Otherwise (a soft or compliant contact, whose
-   load rises slowly) a hinge ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, is fitted by least
-   squares from ``fit_pre_s`` before ``m`` to that level, where ``g_p`` is the ramp
-   ``(t - t0)_+^p`` (p = 1 or 2) averaged over the sample's period ``(t_j - dt, t_j]`` (the
-   sensor's ADC average),
+   first after the latest run of ``quiet_s`` in the band: every sample's 3-sample running
+   median ``<= k_sigma sigma_y`` and the sample itself ``<= spike_k sigma_y`` (a dip after an
+   impact spike does not stop the search; an isolated noise sample of 4 sigma does not end the
+   quiet run, an impact's one-sample spike of more than ``spike_k`` sigma does). A rise
+   that creeps out of the noise (a soft or compliant contact) crosses that band late, so on
+   a calm baseline (``sigma_y <= busy_sigma``) a one-sided CUSUM of ``z = y / sigma_y``
+   (Page's test, :func:`cusum_start`: ``S_j = max(0, S_(j-1) + z_j - cusum_k)`` from the
+   baseline window on, alarm at ``S > cusum_h`` from sample ``m`` on) marks where the mean of
+   ``y`` started to climb, the sample after its last zero; that sample ``n0`` replaces ``m``
+   if it is earlier and at most ``cusum_back_s`` before it (else ``n0 = m``). If ``y`` then
+   reaches ``rise_k k_sigma sigma_y`` within ``fast_samples`` samples of ``m`` (a stiff
+   contact) the onset is the middle of sample ``n0``'s averaging period, ``t_n0 - dt / 2``.
+   Otherwise (a soft or compliant contact, whose load rises slowly) a hinge
+   ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, is fitted by least squares from ``fit_pre_s``
+   before ``n0`` to that level, where ``g_p`` is the ramp ``(t - t0)_+^p`` (p = 1 or 2)
+   averaged over the sample's period ``(t_j - dt, t_j]`` (the sensor's ADC average),
 
    .. math:: g_p(t_j; t_0) = \frac{(t_j - t_0)_+^{p+1} - (t_j - dt - t_0)_+^{p+1}}{(p+1)\,dt}
 
-   and ``t0`` is searched in ``[t_m - back_samples dt, t_m]`` on a grid of ``dt / 20``
+   and ``t0`` is searched in ``[t_n0 - back_samples dt, t_n0]`` on a grid of ``dt / 20``
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
    winning. On a busy baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times
    the sensor's noise, where the ``k_sigma`` band is late by the oscillation's size) a linear
@@ -55,7 +62,9 @@ which must decide causally, this sees the whole recording and works in three ste
    in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
    floor, with the mean of it and the next three frames above ``audio_hold`` times that,
    marks a sound; its onset is the first sample in that frame or the one before with
-   ``|x - median| > audio_k * sigma_noise`` (MAD-based). A sound sets the
+   ``|x - median| > audio_k * sigma_noise`` (MAD-based). When the CUSUM moved the F/T onset
+   before ``t_m - dt / 2``, the window's end stays at ``t_m - dt / 2 + audio_hi_s`` (the
+   earlier onset widens the window, it does not move a sound out of it). A sound sets the
    time (audio has sample resolution); the sound's travel time from the hand to the
    microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
    which are found late rather than early, the window starts at ``audio_slow_lo_s``; after
@@ -107,6 +116,14 @@ class LabelSettings:
         The backward search starts where ``y`` first reaches this fraction of the change.
     k_sigma : float
         Baseline band in robust standard deviations of ``y``.
+    spike_k : float
+        A single sample this many robust standard deviations out leaves the band by itself;
+        a smaller excursion must hold in the 3-sample median.
+    cusum_k, cusum_h : float
+        Allowance and alarm level (in robust standard deviations) of the CUSUM that moves
+        the onset of a rise that creeps out of the noise back to where it started.
+    cusum_back_s : float
+        The CUSUM moves the onset at most this far before sample ``m``.
     quiet_s : float
         Length of the quiet run (at least 3 samples) that ends the backward search.
     rise_k : float
@@ -151,6 +168,10 @@ class LabelSettings:
     fit_pre_s: float = 0.1
     fit_frac: float = 0.5
     k_sigma: float = 3.5
+    spike_k: float = 5.0
+    cusum_k: float = 2.0
+    cusum_h: float = 8.0
+    cusum_back_s: float = 0.05
     quiet_s: float = 0.07
     back_samples: float = 2.0
     busy_sigma: float = 4.0
@@ -158,7 +179,7 @@ class LabelSettings:
     rise_k: float = 3.0
     fast_samples: int = 2
     audio_lo_s: float = -0.05
-    audio_slow_lo_s: float = -0.15
+    audio_slow_lo_s: float = -0.08
     audio_hi_s: float = 0.03
     frame_s: float = 0.002
     audio_rise: float = 5.0
@@ -224,6 +245,54 @@ def _running_median(x: np.ndarray, n: int) -> np.ndarray:
     if n <= 1:
         return x
     return median_filter(x, size=(n, 1), mode='nearest')
+
+
+def _median3(y: np.ndarray) -> np.ndarray:
+    """Centred running median of 3 samples (the end samples kept)."""
+    out = np.array(y, dtype=float)
+    if len(out) >= 3:
+        out[1:-1] = np.median(np.stack([out[:-2], out[1:-1], out[2:]]), axis=0)
+    return out
+
+
+def cusum_start(*, z: np.ndarray, start: int, alarm_from: int, kappa: float,
+                h: float) -> Optional[int]:
+    r"""
+    First sample of a rise in ``z`` by a one-sided CUSUM (Page's test), or None.
+
+    .. math:: S_j = \max(0, S_{j-1} + z_j - \kappa), \quad S_{start - 1} = 0
+
+    The alarm is the first ``j >= alarm_from`` with ``S_j > h``; the rise starts at the
+    sample after the last ``S_j = 0`` before it (the estimate of the change point).
+
+    Parameters
+    ----------
+    z : np.ndarray, shape (n,)
+        The signal in units of its baseline noise (baseline mean 0).
+    start : int
+        First sample summed.
+    alarm_from : int
+        Alarms before this sample are ignored (the sum goes on).
+    kappa : float
+        Allowance: the drift per sample that counts as no change.
+    h : float
+        Alarm level.
+
+    Returns
+    -------
+    int or None
+        Index of the rise's first sample; None without an alarm.
+
+    """
+    acc = 0.0
+    last_zero = start - 1
+    for j in range(start, len(z)):
+        acc = max(0.0, acc + float(z[j]) - kappa)
+        if acc == 0.0:
+            last_zero = j
+        elif j >= alarm_from and acc > h:
+            return last_zero + 1
+    return None
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -417,17 +486,27 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # the latest sample ending a run of n_quiet samples within k_sigma of the baseline: the
     # next one is the first that left it (short dips after an impact do not stop the search)
     n_quiet = max(3, int(round(s.quiet_s / dt)))
-    quiet = np.convolve((y[:r + 1] > s.k_sigma * sd).astype(float), np.ones(n_quiet),
-                        mode='full')[:r + 1] == 0
+    # "out of the band": its 3-sample median is (an isolated noise sample is not), or the
+    # sample itself is by spike_k sigmas (an impact's one-sample spike is)
+    out = (_median3(y[:r + 2])[:r + 1] > s.k_sigma * sd) | (y[:r + 1] > s.spike_k * sd)
+    quiet = np.convolve(out.astype(float), np.ones(n_quiet), mode='full')[:r + 1] == 0
     quiet[:n_quiet - 1] = False
     ends = np.nonzero(quiet)[0]
     m = int(ends[-1]) + 1 if len(ends) else max(r, 1)
-    # fast rise: the onset is within the averaging period of sample m (its middle); slow
-    # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
-    ft_onset = float(t[m]) - 0.5 * dt
     level_hi = min(s.rise_k * s.k_sigma * sd, 0.5 * float(np.linalg.norm(change)))
     above = np.nonzero(y[m:b] >= level_hi)[0]
     e = m + (int(above[0]) if len(above) else 0)
+    # a rise that creeps out of the noise crosses the band late: a CUSUM of y finds where its
+    # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
+    n0 = m
+    if sd <= s.busy_sigma:
+        c = cusum_start(z=y[:max(r, m) + 1] / sd, start=j0, alarm_from=m, kappa=s.cusum_k,
+                        h=s.cusum_h)
+        if c is not None and c < m and t[m] - t[c] <= s.cusum_back_s:
+            n0 = c
+    # fast rise: the onset is within the averaging period of sample n0 (its middle); slow
+    # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
+    ft_onset = float(t[n0]) - 0.5 * dt
     if sd > s.busy_sigma:
         # a busy baseline (ripple, slosh: many times the sensor noise): the k_sigma search
         # is late by up to the oscillation's size; a ramp fitted through it averages it out
@@ -435,9 +514,9 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         ft_onset = hinge_fit(t=t[k_start:r + 1], y=y[k_start:r + 1], dt=dt,
                              lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
     elif e - m >= s.fast_samples:
-        k_start = max(0, m - max(12, int(round(s.fit_pre_s / dt))))
+        k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
-                             lo=float(t[m]) - s.back_samples * dt, hi=float(t[m]))[0]
+                             lo=float(t[n0]) - s.back_samples * dt, hi=float(t[n0]))[0]
     slow = sd > s.busy_sigma or e - m >= s.fast_samples
     confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
     onset, source, a_on = ft_onset, 'ft', None
@@ -446,9 +525,11 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         # after a fast rise the F/T onset is good to a sample: a sound starting much earlier
         # is something else (a clatter, a knock)
         lo = s.audio_slow_lo_s if slow else max(s.audio_lo_s, -2.0 * dt)
+        # the window reaches from before the onset to after where y left the band (sample m)
+        around = max(ft_onset, float(t[m]) - 0.5 * dt)
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
-                                   around=ft_onset,
-                                   settings=dataclasses.replace(s, audio_lo_s=lo))
+                                   around=around, settings=dataclasses.replace(
+                                       s, audio_lo_s=lo + ft_onset - around))
         if a_on is None:
             # no sound where a fast rise puts the contact: the F/T may have left its baseline
             # early (a push, a brush); a loud impact just after it is the contact

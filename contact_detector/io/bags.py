@@ -198,8 +198,8 @@ def open_reader(path: str | Path) -> Iterator[AnyReader]:
 
 
 def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
-                  decoders: Mapping[str, Callable[[bytes], Any]] | None = None
-                  ) -> Iterator[BagMessage]:
+                  decoders: Mapping[str, Callable[[bytes], Any]] | None = None,
+                  raw: bool = False) -> Iterator[BagMessage]:
     """
     Yield the messages of a bag in log-time order.
 
@@ -219,6 +219,10 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
         bytes, see :mod:`contact_detector.io.cdr`); a reader that returns None hands the
         message to rosbags. ROS 1 bags use :data:`contact_detector.io.ros1.FAST_DECODERS`
         when ``decoders`` is given.
+    raw : bool
+        Yield each message's bytes as stored (CDR for rosbag2, the ROS 1 serialisation for a
+        ``.bag``) instead of a deserialised message; ``decoders`` is then ignored. What
+        ``replay`` publishes (:func:`iter_cdr`).
 
     Yields
     ------
@@ -234,7 +238,10 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
     path = Path(path)
     _check_bag(path)
     is1 = is_ros1_bag(path)
-    decoders = (ros1.FAST_DECODERS if is1 else decoders) if decoders else {}
+    if raw:
+        decoders = _RAW
+    else:
+        decoders = (ros1.FAST_DECODERS if is1 else decoders) if decoders else {}
     seen = _Seen()
     bad: dict[str, int] = {}
     problem = None
@@ -293,6 +300,19 @@ def iter_messages(path: Path, *, topics: Sequence[str] | None = None,
         counts = ', '.join(f'{n} on {topic}' for topic, n in sorted(bad.items()))
         _warn_once(f'damaged bag {path}: skipped {sum(bad.values())} messages whose bytes do '
                    f'not deserialise ({counts})')
+
+
+class _AsStored(dict):
+    """Decoders that keep every message's bytes as stored (``iter_messages(raw=True)``)."""
+
+    def get(self, key: str, default: Any = None) -> Callable[[bytes], bytes]:
+        return bytes
+
+    def __bool__(self) -> bool:
+        return True
+
+
+_RAW = _AsStored()
 
 
 def _metadata(path: Path) -> dict | None:
@@ -413,42 +433,45 @@ def iter_cdr(path: Path, *, topics: Sequence[str] | None = None
     rosbag2 messages are yielded as recorded. ROS 1 messages are deserialised with the bag's
     definitions and serialised again as ROS 2 CDR with the Jazzy definitions (types Jazzy
     lacks, e.g. ``audio_common_msgs``, keep the bag's definitions; ``Header.seq`` is dropped),
-    so ``replay`` can publish an old recording into a ROS 2 graph.
+    so ``replay`` can publish an old recording into a ROS 2 graph. The messages are read by
+    :func:`iter_messages`, so a damaged bag gives what can be read, with the same warning.
 
     Raises
     ------
     BagError
-        The bag cannot be read, or a ROS 1 message does not map onto its ROS 2 type.
+        Nothing in the bag can be read, or a ROS 1 message does not map onto its ROS 2 type.
 
     """
     path = Path(path)
-    with open_reader(path) as reader:
-        conns = [c for c in reader.connections if topics is None or c.topic in topics]
-        if not conns:
-            return
-        store = None
-        if not reader.is2:
-            store = get_typestore(Stores.ROS2_JAZZY)
-            have = set(store.fielddefs)
-            store.register({name: defs for name, defs in reader.typestore.fielddefs.items()
-                            if name not in have})
+    if not is_ros1_bag(path):
+        for m in iter_messages(path, topics=topics, raw=True):
+            yield m.topic, m.msgtype, m.log_time_ns, m.msg
+        return
+    store = None
+    for m in iter_messages(path, topics=topics):
+        if store is None:
+            store = _ros2_typestore(path)
         try:
-            for conn, log_ns, raw in reader.messages(connections=conns):
-                if store is None:
-                    yield conn.topic, conn.msgtype, int(log_ns), bytes(raw)
-                    continue
-                try:
-                    msg = ros1.to_ros2(reader.deserialize(raw, conn.msgtype),
-                                       msgtype=conn.msgtype, typestore=store)
-                    cdr = bytes(store.serialize_cdr(msg, conn.msgtype))
-                except Exception as err:
-                    raise BagError(f'{path}: cannot convert {conn.topic} ({conn.msgtype}) '
-                                   f'to ROS 2: {err}') from err
-                yield conn.topic, conn.msgtype, int(log_ns), cdr
-        except BagError:
-            raise
+            cdr = bytes(store.serialize_cdr(ros1.to_ros2(m.msg, msgtype=m.msgtype,
+                                                         typestore=store), m.msgtype))
         except Exception as err:
-            raise BagError(f'{path}: error while reading messages: {err}') from err
+            raise BagError(f'{path}: cannot convert {m.topic} ({m.msgtype}) to ROS 2: '
+                           f'{err}') from err
+        yield m.topic, m.msgtype, m.log_time_ns, cdr
+
+
+def _ros2_typestore(path: Path) -> Any:
+    """Jazzy's types plus the types of a ROS 1 bag that Jazzy lacks (its own definitions)."""
+    try:
+        with open_reader(path) as reader:
+            defs = reader.typestore.fielddefs
+    except BagError as err:     # a damaged bag: the definitions the salvage found
+        saved = _salvaged(path, f'it does not open ({_first_line(err)})')
+        defs = saved.definitions()
+    store = get_typestore(Stores.ROS2_JAZZY)
+    have = set(store.fielddefs)
+    store.register({name: d for name, d in defs.items() if name not in have})
+    return store
 
 
 def _check_bag(path: Path) -> None:

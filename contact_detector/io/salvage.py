@@ -152,6 +152,11 @@ class Salvaged:
             return self._store.deserialize_cdr(raw, msgtype)
         return self._store.deserialize_ros1(raw, msgtype)
 
+    def definitions(self) -> dict:
+        """Type name -> field definitions the deserialiser knows (rosbags ``fielddefs``)."""
+        self.knows('')
+        return dict(self._store.fielddefs) if self._store is not None else {}
+
     def knows(self, msgtype: str) -> bool:
         """Return True if ``msgtype`` has a definition (so a failure means bad bytes)."""
         if self._store is None:

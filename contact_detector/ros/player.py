@@ -17,7 +17,9 @@ Publish a bag into the live ROS graph with its original timing (no ``ros2 bag``)
 
 rosbag2 messages go out as their recorded CDR bytes, so any type rclpy can import plays back
 unchanged; ROS 1 bags are converted to ROS 2 CDR first
-(:func:`contact_detector.io.bags.iter_cdr`). Two options make a recording look live:
+(:func:`contact_detector.io.bags.iter_cdr`). The bag is read by the offline commands' reader,
+so a damaged bag plays up to where it is readable, with one warning naming the damage
+(:mod:`contact_detector.io.salvage`). Two options make a recording look live:
 
 * ``clock``: publish ``/clock`` (rosgraph_msgs/Clock) with the bag time before every message
   and at least every 10 ms, for nodes running with ``use_sim_time`` — as
@@ -63,7 +65,12 @@ class Recorded:
 
 
 def read_recording(bag: Path, *, topics: Optional[Sequence[str]] = None) -> List[Recorded]:
-    """Read every message of a bag (rosbag2 or ROS 1) as ROS 2 CDR, in log-time order."""
+    """
+    Read every message of a bag (rosbag2 or ROS 1) as ROS 2 CDR, in log-time order.
+
+    A damaged bag gives its readable messages and logs one warning (logger
+    ``contact_detector.io.bags``); BagError if nothing in it can be read.
+    """
     try:
         return [Recorded(topic=topic, msgtype=msgtype, log_ns=t, raw=raw)
                 for topic, msgtype, t, raw in iter_cdr(Path(bag), topics=topics)]
@@ -286,7 +293,8 @@ def replay_bag(*, bag: Path, rate: float = 1.0, loop: bool = False, clock: bool 
     Raises
     ------
     BagError
-        The bag cannot be read or has no messages, or the options do not fit together.
+        Nothing in the bag can be read or it has no messages, or the options do not fit
+        together. A damaged bag plays what can be read (one warning names the damage).
 
     """
     from rclpy.executors import ExternalShutdownException

@@ -1,0 +1,91 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Hindsight labelling on synthetic F/T: slow rises without a sound, noise before a contact.
+
+The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
+the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
+axis. The load acts along -z with a lever arm, so force and torque change together.
+"""
+
+from contact_detector.evaluation.labelling import cusum_start, propose_onset
+import numpy as np
+import pytest
+
+RATE = 100.0
+OVERSAMPLE = 20
+ONSET = 3.0137
+DT = 1.0 / RATE
+
+
+def _wrench(load_fn, *, seed: int, outliers: tuple = ()) -> tuple:
+    """Return ``(t, force, torque)``: 6 s, ``load_fn(tau)`` in N from ONSET, lift-off at 5 s."""
+    rng = np.random.default_rng(seed)
+    fine = np.arange(int(6.0 * RATE * OVERSAMPLE)) / (RATE * OVERSAMPLE)
+    load = np.where(fine >= ONSET, load_fn(np.maximum(fine - ONSET, 0.0)), 0.0)
+    load[fine > 5.0] = 0.0
+    n = len(fine) // OVERSAMPLE
+    fz = -load[:n * OVERSAMPLE].reshape(n, OVERSAMPLE).mean(axis=1)
+    t = (np.arange(n) + 1) * DT
+    force = np.zeros((n, 3))
+    torque = np.zeros((n, 3))
+    force[:, 2] = fz - 5.0
+    torque[:, 0] = 0.05 * fz
+    force += rng.normal(0.0, 0.15, (n, 3))
+    torque += rng.normal(0.0, 0.006, (n, 3))
+    for seconds_before, sigmas in outliers:
+        # one sample out along the load's direction (force z and torque x together) by
+        # `sigmas` of the noise along it
+        j = int(np.searchsorted(t, ONSET - seconds_before))
+        force[j, 2] -= sigmas / np.sqrt(2.0) * 0.15
+        torque[j, 0] -= sigmas / np.sqrt(2.0) * 0.006
+    return t, force, torque
+
+
+def _soft(tau: np.ndarray) -> np.ndarray:
+    """Return a compliant contact's load, N: k v tau (1 - exp(-tau / ctau)), to 8 N."""
+    return np.minimum(80.0 * tau * (1.0 - np.exp(-tau / 0.12)), 8.0)
+
+
+@pytest.mark.parametrize('seed', [5, 6, 7])
+def test_a_slow_rise_without_a_sound_is_found_within_20_ms(seed):
+    # the load creeps out of the noise: it crosses 3.5 sigma about 40 ms after the onset
+    t, force, torque = _wrench(_soft, seed=seed)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert p.source == 'ft'
+    assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [4, 5])
+def test_isolated_noise_samples_before_a_stiff_contact_do_not_move_it_early(seed):
+    # two single samples of 3.5 sigma, 40 ms and 100 ms before the contact, break every run
+    # of 7 quiet samples in between: neither leaves the baseline, the contact's step is the
+    # onset (with the raw samples in the band test, the onset went 35 or 95 ms early)
+    t, force, torque = _wrench(lambda tau: np.minimum(400.0 * tau, 8.0), seed=seed,
+                               outliers=((0.10, 3.5), (0.04, 3.5)))
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
+
+
+def test_cusum_start_finds_a_ramp_before_it_leaves_the_band():
+    rng = np.random.default_rng(0)
+    z = rng.normal(0.0, 1.0, 400)
+    z[250:] += 0.15 * np.arange(150)     # a ramp of 0.15 sigma per sample from sample 250
+    # its mean passes kappa = 2 at sample 263 and the 3.5-sigma band at 273
+    start = cusum_start(z=z, start=0, alarm_from=270, kappa=2.0, h=8.0)
+    assert start is not None and 255 <= start <= 268
+    # no change: no alarm
+    assert cusum_start(z=rng.normal(0.0, 1.0, 400), start=0, alarm_from=0, kappa=2.0,
+                       h=8.0) is None
