@@ -53,10 +53,15 @@ which must decide causally, this sees the whole recording and works in three ste
 
    and ``t0`` is searched in ``[t_n0 - back_samples dt, t_n0]`` on a grid of ``dt / 20``
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
-   winning. On a busy baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times
-   the sensor's noise, where the ``k_sigma`` band is late by the oscillation's size) a linear
-   hinge through the ``busy_back_s`` before ``m`` up to where the search started sets ``t0``
-   anywhere in that span.
+   winning. That short fit cannot reach back past ``back_samples`` on a rise that creeps out
+   of the noise, so a second, linear (p = 1) hinge, the knee of flat-then-rising, is fitted
+   over the whole early rise, from ``knee_pre_s`` before ``n0`` (not before the baseline
+   window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
+   ``[t_n0 - cusum_back_s, t_n0]``; the earlier of the two onsets is kept. On a busy
+   baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times the sensor's noise,
+   where the ``k_sigma`` band is late by the oscillation's size) a linear hinge through the
+   ``busy_back_s`` before ``m`` up to where the search started sets ``t0`` anywhere in that
+   span.
 3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared
    with its noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame
    in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
@@ -73,7 +78,12 @@ which must decide causally, this sees the whole recording and works in three ste
    ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its
    baseline before the contact (a push on the object, a brush, the approach's deceleration),
    and a loud impact just after is the contact, which the F/T step alone would put tens of
-   ms early.
+   ms early. After a rise that creeps out of the noise (calm baseline, ``y`` takes at least
+   ``faint_samples`` samples from sample ``m`` to the fast-rise level), which is found late,
+   a faint click (``audio_faint`` times the floor, +5 dB) from ``audio_slow_lo_s`` before
+   the F/T onset up to it sets the time when no sound was found; one after the F/T onset
+   adds nothing (a dull thud crosses the level late), and after a fast or busy rise a faint
+   sound is more likely something else (a knock, noise).
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
@@ -157,6 +167,17 @@ class LabelSettings:
         a brush, the approach).
     audio_strong : float
         Power ratio over the noise floor of such a strong sound (30 = +15 dB).
+    audio_faint : float
+        Power ratio over the noise floor of a faint click (3 = +5 dB), looked for before the
+        F/T onset of a creeping rise when there is no sound.
+    faint_samples : int
+        A calm rise that takes at least this many samples from sample ``m`` to
+        ``rise_k * k_sigma`` sigmas creeps (the faint click is looked for).
+    knee_frac : float
+        The knee fit of a slow rise runs up to where ``y`` reaches this fraction of the
+        change.
+    knee_pre_s : float
+        The knee fit starts this long before sample ``n0`` (not before the baseline window).
 
     """
 
@@ -187,6 +208,10 @@ class LabelSettings:
     audio_k: float = 5.0
     audio_strong_hi_s: float = 0.08
     audio_strong: float = 30.0
+    audio_faint: float = 3.0
+    faint_samples: int = 4
+    knee_frac: float = 0.25
+    knee_pre_s: float = 0.2
 
 
 @dataclass
@@ -517,6 +542,15 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
                              lo=float(t[n0]) - s.back_samples * dt, hi=float(t[n0]))[0]
+        # the knee of flat-then-linear over the whole early rise (to knee_frac of the
+        # change) averages the noise of many samples: on a rise that creeps out of the noise
+        # it finds the start that the short fit, limited to back_samples, cannot reach
+        reached = np.nonzero(y[m:b] >= s.knee_frac * float(np.linalg.norm(change)))[0]
+        k_end = max(e, m + (int(reached[0]) if len(reached) else 0))
+        k_start = max(j0, n0 - int(round(s.knee_pre_s / dt)))
+        knee = hinge_fit(t=t[k_start:k_end + 1], y=y[k_start:k_end + 1], dt=dt,
+                         lo=float(t[n0]) - s.cusum_back_s, hi=float(t[n0]), powers=(1,))[0]
+        ft_onset = min(ft_onset, knee)
     slow = sd > s.busy_sigma or e - m >= s.fast_samples
     confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
     onset, source, a_on = ft_onset, 'ft', None
@@ -530,6 +564,13 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
                                    around=around, settings=dataclasses.replace(
                                        s, audio_lo_s=lo + ft_onset - around))
+        if a_on is None and sd <= s.busy_sigma and e - m >= s.faint_samples:
+            # a rise that creeps out of the noise is found late: a faint click before its
+            # F/T onset marks the contact better (one after it adds nothing)
+            a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
+                                       around=ft_onset, settings=dataclasses.replace(
+                                           s, audio_lo_s=lo, audio_hi_s=0.0,
+                                           audio_rise=s.audio_faint))
         if a_on is None:
             # no sound where a fast rise puts the contact: the F/T may have left its baseline
             # early (a push, a brush); a loud impact just after it is the contact

@@ -13,11 +13,12 @@
 # limitations under the License.
 
 """
-Hindsight labelling on synthetic F/T: slow rises without a sound, noise before a contact.
+Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
-axis. The load acts along -z with a lever arm, so force and torque change together.
+axis. The load acts along -z with a lever arm, so force and torque change together. The audio
+is white noise at 16 kHz with, where a test adds one, a faint click (a decaying noise burst).
 """
 
 from contact_detector.evaluation.labelling import cusum_start, propose_onset
@@ -28,6 +29,7 @@ RATE = 100.0
 OVERSAMPLE = 20
 ONSET = 3.0137
 DT = 1.0 / RATE
+AUDIO_RATE = 16000.0
 
 
 def _wrench(load_fn, *, seed: int, outliers: tuple = ()) -> tuple:
@@ -89,3 +91,52 @@ def test_cusum_start_finds_a_ramp_before_it_leaves_the_band():
     # no change: no alarm
     assert cusum_start(z=rng.normal(0.0, 1.0, 400), start=0, alarm_from=0, kappa=2.0,
                        h=8.0) is None
+
+
+def _audio(*, seed: int, click_at: float, ratio: float) -> np.ndarray:
+    """Return 6 s of noise (sd 0.01) and a click from ``click_at`` (s): ``ratio`` x its power."""
+    rng = np.random.default_rng(seed + 100)
+    x = rng.normal(0.0, 0.01, int(6.0 * AUDIO_RATE))
+    k, n = int(click_at * AUDIO_RATE), int(0.03 * AUDIO_RATE)
+    decay = np.exp(-np.arange(n) / (0.015 * AUDIO_RATE))
+    x[k:k + n] += rng.normal(0.0, 0.01 * np.sqrt(ratio - 1.0), n) * decay
+    return x
+
+
+def _transfer(slope: float):
+    """Return a compliant wrist's load, N: the weight moves at ``slope`` N/s, to 3 N."""
+    return lambda tau: np.minimum(slope * tau, 3.0)
+
+
+@pytest.mark.parametrize('seed', [3, 4, 6, 7])
+def test_a_slow_linear_weight_transfer_is_found_within_20_ms(seed):
+    # 6 N/s (0.5 sigma per sample along the change): the 2-sample hinge and the CUSUM stopped
+    # 26-36 ms late; the knee of flat-then-linear over the early rise is within 15 ms
+    t, force, torque = _wrench(_transfer(6.0), seed=seed)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert p.source == 'ft'
+    assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 5, 7])
+def test_a_faint_click_before_a_late_slow_rise_sets_the_onset(seed):
+    # 4 N/s: the F/T onset is 26-56 ms late; the click at the contact is 4 times the noise's
+    # power (+6 dB, under the 5 times of a sound) and sets the onset
+    t, force, torque = _wrench(_transfer(4.0), seed=seed)
+    audio = _audio(seed=seed, click_at=ONSET, ratio=4.0)
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'audio'
+    assert abs(p.onset_t - ONSET) <= 0.005, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 1])
+def test_a_faint_click_before_a_stiff_contact_is_not_its_onset(seed):
+    # a stiff contact's F/T onset is good to a sample: a faint click 15 ms before is something
+    # else and does not move it
+    t, force, torque = _wrench(lambda tau: np.minimum(400.0 * tau, 8.0), seed=seed)
+    audio = _audio(seed=seed, click_at=ONSET - 0.015, ratio=4.0)
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'ft'
+    assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
