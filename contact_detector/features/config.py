@@ -110,14 +110,15 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
-                   'torque_change_max', 'force_change_hold', 'torque_change_hold')
+                   'torque_change_max')
 
 #: The features computed from the force and torque *vectors* (not their magnitudes): they do not
 #: depend on how the sensor is oriented, on gravity's direction in its frame or on its tare.
 SHIFT_FEATURES = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
-                  'force_shift_max', 'torque_shift_max', 'force_shift_hold', 'torque_shift_hold')
+                  'force_shift_max', 'torque_shift_max')
 
-#: The features that hold a change over the newest ``hold_frames`` F/T feature frames.
+#: The features that hold a change over the newest ``hold_frames`` F/T feature frames (they
+#: need both the ``*_change`` and the ``*_shift`` values).
 HOLD_FEATURES = ('force_change_hold', 'torque_change_hold', 'force_shift_hold',
                  'torque_shift_hold')
 
