@@ -50,7 +50,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                          'minimum'),
                         ('shift_lag', 'F/T samples from the newest to the end of the '
                                       '*_shift baseline'),
-                        ('shift_window', 'F/T samples in the median baseline of *_shift')):
+                        ('shift_window', 'F/T samples in the median baseline of *_shift'),
+                        ('hold_frames', 'F/T feature frames over which the *_hold features '
+                                        'see whether a change held')):
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
@@ -120,7 +122,8 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,
                          change_max_frames=args.change_max_frames,
                          shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
-                         shift_window=args.shift_window, extra_features=extra)
+                         shift_window=args.shift_window, hold_frames=args.hold_frames,
+                         extra_features=extra)
 
 
 def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:

@@ -26,7 +26,7 @@ from typing import Optional
 
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              SHIFT_FEATURES)
+                                              HOLD_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
@@ -130,7 +130,7 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     n = config.ft_window
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
-    if set(deltas) & set(SHIFT_FEATURES):
+    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)):
         need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
     rows, times, changes, shifts = [], [], [], []
@@ -178,6 +178,18 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                 pick = min if name == 'min' else max
                 derived[f'force_shift_{name}'] = pick(s[0] for s in recent)
                 derived[f'torque_shift_{name}'] = pick(s[1] for s in recent)
+            # the change that held over the newest hold_frames frames: one sign throughout
+            held = [c + s for c, s in zip(changes[-config.hold_frames:],
+                                          shifts[-config.hold_frames:])]
+            for k, name in enumerate(('force_change_hold', 'torque_change_hold')):
+                if all(h[k] > 0 for h in held):
+                    derived[name] = min(h[k] for h in held)
+                elif all(h[k] < 0 for h in held):
+                    derived[name] = max(h[k] for h in held)
+                else:
+                    derived[name] = 0.0
+            derived['force_shift_hold'] = min(h[2] for h in held)
+            derived['torque_shift_hold'] = min(h[3] for h in held)
         rows.append(row + [derived[name] for name in deltas])
         times.append(dec_t[end])
     x = np.array(rows) if rows else np.zeros((0, len(columns)))

@@ -68,7 +68,10 @@ PAPER_FEATURES = (
 #: presses beyond it. ``*_shift_min`` is its minimum over the newest ``shift_min_frames`` F/T
 #: feature frames (a *lasting* change: a knock's pulse and the ringing after it pass through
 #: small values, a load transfer does not) and ``*_shift_max`` its maximum over the newest
-#: ``change_max_frames`` frames.
+#: ``change_max_frames`` frames. ``*_change_hold`` is the signed change that *held* over the
+#: newest ``hold_frames`` F/T feature frames: their smallest ``*_change`` if all are > 0, their
+#: largest if all are < 0, else 0 (N, N m); ``*_shift_hold`` the smallest ``*_shift`` over the
+#: same frames. A knock's pulse falls back within a few frames, a step of the load does not.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -88,6 +91,10 @@ EXTRA_FEATURES = (
     'torque_shift_min',
     'force_shift_max',
     'torque_shift_max',
+    'force_change_hold',
+    'torque_change_hold',
+    'force_shift_hold',
+    'torque_shift_hold',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -98,7 +105,8 @@ AUDIO_FEATURES = ('audio_power', 'audio_power_rel_db', 'audio_peak_rel_db', 'aud
 DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change',
                   'torque_change', 'ft_change_angle', 'force_change_max', 'torque_change_max',
                   'force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
-                  'force_shift_max', 'torque_shift_max')
+                  'force_shift_max', 'torque_shift_max', 'force_change_hold',
+                  'torque_change_hold', 'force_shift_hold', 'torque_shift_hold')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -108,6 +116,15 @@ CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_ch
 #: depend on how the sensor is oriented, on gravity's direction in its frame or on its tare.
 SHIFT_FEATURES = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
                   'force_shift_max', 'torque_shift_max')
+
+#: The features that hold a change over the newest ``hold_frames`` F/T feature frames (they
+#: need both the ``*_change`` and the ``*_shift`` values).
+HOLD_FEATURES = ('force_change_hold', 'torque_change_hold', 'force_shift_hold',
+                 'torque_shift_hold')
+
+#: :attr:`FeatureConfig.hold_frames` when not given: left out of :meth:`FeatureConfig.to_dict`
+#: so configurations written before the field existed, and their model hashes, stay the same.
+DEFAULT_HOLD_FRAMES = 4
 
 WINDOW_FUNCTIONS = ('rect', 'hann')
 DETREND_MODES = ('none', 'mean')
@@ -167,6 +184,10 @@ class FeatureConfig:
         Whether the vector has audio columns. False: no ``audio_power`` column and no audio
         extra feature (refused); rows are then clocked by the F/T feature frames, one row per
         F/T feature frame, for robots without a microphone.
+    hold_frames : int
+        F/T feature frames over which ``*_change_hold`` and ``*_shift_hold`` see whether a
+        change held (default 4, 40 ms at 100 Hz; written by :meth:`to_dict` only when it
+        differs).
 
     Notes
     -----
@@ -199,6 +220,7 @@ class FeatureConfig:
     shift_lag: int = 20
     shift_window: int = 40
     audio: bool = True
+    hold_frames: int = DEFAULT_HOLD_FRAMES
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -212,7 +234,8 @@ class FeatureConfig:
         for name, low in (('ft_window', 4), ('ft_hop', 1), ('delta_window', 1),
                           ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1),
                           ('rise_frames', 1), ('change_max_frames', 1),
-                          ('shift_min_frames', 1), ('shift_lag', 1), ('shift_window', 1)):
+                          ('shift_min_frames', 1), ('shift_lag', 1), ('shift_window', 1),
+                          ('hold_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')
@@ -300,6 +323,8 @@ class FeatureConfig:
         if self.audio:
             # Configs written before the field existed, and their model hashes, stay the same.
             del data['audio']
+        if self.hold_frames == DEFAULT_HOLD_FRAMES:
+            del data['hold_frames']
         return data
 
     @classmethod

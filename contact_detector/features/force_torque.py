@@ -28,7 +28,7 @@ from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
 from contact_detector.features.config import (CHANGE_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              PAPER_FEATURES, SHIFT_FEATURES)
+                                              HOLD_FEATURES, PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.deltas import (vector_shift, window_mean, window_median,
                                               with_angle)
 from contact_detector.features.frames import TimeJumpError
@@ -77,7 +77,8 @@ class ForceTorqueStream:
         n = config.ft_window
         need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
                 if self.use_delta else n)
-        if set(self.use_delta) & set(SHIFT_FEATURES):
+        # the *_hold features hold both the changes and the shifts
+        if set(self.use_delta) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)):
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
         self.first_end = need - 1
         self.history = need
@@ -88,10 +89,13 @@ class ForceTorqueStream:
         self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
         # (force_change, torque_change) of the frames before the newest, for *_change_max.
         self._recent_changes = TailBuffer(capacity=config.change_max_frames, width=2)
-        self._want_shift = bool(wanted & set(SHIFT_FEATURES))
+        self._want_shift = bool(wanted & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)))
         # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
         self._recent_shifts = TailBuffer(
             capacity=max(config.change_max_frames, config.shift_min_frames), width=2)
+        # (change, shift) of |F| and |T| of the frames before the newest, for *_hold.
+        self._want_hold = bool(wanted & set(HOLD_FEATURES))
+        self._recent_holds = TailBuffer(capacity=config.hold_frames, width=4)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
@@ -117,6 +121,7 @@ class ForceTorqueStream:
         self._recent_changes.clear()
         self._vecs.clear()
         self._recent_shifts.clear()
+        self._recent_holds.clear()
 
     def check_stamps(self, t: np.ndarray) -> None:
         """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
@@ -225,6 +230,20 @@ class ForceTorqueStream:
         self._recent_shifts.keep_last(max(k_min, k_max) - 1)
         return low, high
 
+    def _held(self, values: np.ndarray) -> np.ndarray:
+        # *_change_hold (columns 0, 1) and *_shift_hold (2, 3) of the (m, 4) new changes and
+        # shifts over the newest hold_frames frames; keeps the newest for the next call.
+        window = self.config.hold_frames
+        before = self._recent_holds.view
+        high = running_max(values=values, before=before, window=window)
+        low = -running_max(values=-values, before=-before, window=window)
+        self._recent_holds.extend(values)
+        self._recent_holds.keep_last(window - 1)
+        # the signed change that held: its smallest size if it kept one sign, else 0
+        held = np.maximum(low, 0.0) + np.minimum(high, 0.0)
+        held[:, 2:] = low[:, 2:]
+        return held
+
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dec_t, dec_v = self._resampler.push(t=t, values=v)
         n_blocks = dec_t.size
@@ -289,7 +308,7 @@ class ForceTorqueStream:
                                               window=cfg.delta_window)
                 derived.update(with_angle(('force_delta', 'torque_delta', 'ft_delta_angle'),
                                           change))
-            if wanted & set(CHANGE_FEATURES):
+            if wanted & (set(CHANGE_FEATURES) | set(HOLD_FEATURES)):
                 change = recent - window_median(signal=mags, ends=lagged,
                                                 window=cfg.baseline_window)
                 derived.update(with_angle(('force_change', 'torque_change', 'ft_change_angle'),
@@ -307,6 +326,12 @@ class ForceTorqueStream:
                 derived['force_shift'], derived['torque_shift'] = shift.T
                 derived['force_shift_min'], derived['torque_shift_min'] = low.T
                 derived['force_shift_max'], derived['torque_shift_max'] = high.T
+            if self._want_hold:
+                held = self._held(np.stack(
+                    [derived['force_change'], derived['torque_change'],
+                     derived['force_shift'], derived['torque_shift']], axis=1))
+                for name, column in zip(HOLD_FEATURES, held.T):
+                    derived[name] = column
         for col, name in enumerate(self.use_delta, start=6):
             out[:, col] = derived[name]
         return out

@@ -54,6 +54,7 @@ _SPECTRAL = ('force_centroid', 'force_spread', 'force_flux', 'torque_centroid', 
 _SHIFT = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
           'force_shift_max', 'torque_shift_max')
 _SIGNED = ('force_change', 'torque_change', 'force_change_max', 'torque_change_max')
+_HOLD = ('force_change_hold', 'torque_change_hold', 'force_shift_hold', 'torque_shift_hold')
 #: The feature settings --lofo compares: name -> columns (None: the shipped model's).
 LOFO_SETTINGS = {
     'shipped': None,
@@ -65,6 +66,7 @@ LOFO_SETTINGS = {
     'invariant+signed': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SHIFT + _SIGNED,
     'ft-only': _SPECTRAL + _SHIFT,
     'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
+    'ft-only+signed+hold': _SPECTRAL + _SHIFT + _SIGNED + _HOLD,
 }
 
 

@@ -261,6 +261,46 @@ def test_shift_min_tells_a_lasting_load_change_from_a_knock():
     assert at[90][4] == pytest.approx(8.0)               # the maximum remembers the knock
 
 
+def test_hold_features_see_that_a_load_change_stayed_and_a_knock_fell_back():
+    # the knock and the touch of the test above: a touch's change holds one sign for the last
+    # 4 frames from 40 ms after it, a knock's pulse and ringing do not
+    config = FeatureConfig(extra_features=('force_change', 'force_shift', 'force_change_hold',
+                                           'torque_change_hold', 'force_shift_hold'),
+                           delta_window=1, hold_frames=4)
+    n = 160
+    force = np.zeros((n, 3))
+    force[:, 2] = -10.0
+    knock = force.copy()
+    knock[80:82, 2] -= 8.0
+    knock[83:87, 2] += 3.0 * np.array([1, -1, 1, -1])
+    touch = force.copy()
+    touch[80:, 2] += 3.0
+    seen = {}
+    for name, f in (('knock', knock), ('touch', touch)):
+        stream = ForceTorqueStream(config=config, input_rate=100.0)
+        t, x = stream.push(t=T0 + np.arange(n) / 100, force=f, torque=np.zeros((n, 3)))
+        seen[name] = dict(zip(np.round((t - T0) * 100).astype(int).tolist(),
+                              x[:, -5:].tolist()))
+    pulse = knock
+    knock, touch = seen['knock'], seen['touch']
+    assert touch[79] == [0.0] * 5                       # a constant load gives zeros
+    # the touch: |F| fell 3 N; held for 4 frames only from its 4th frame on
+    assert touch[80][0] == pytest.approx(-3.0) and touch[80][2] == pytest.approx(0.0)
+    assert touch[83][2] == pytest.approx(-3.0)           # unloading that held: negative
+    assert touch[83][4] == pytest.approx(3.0)            # and the vector shift held
+    assert touch[83][3] == 0.0                           # no torque moved
+    # the knock: as large a change, but it does not hold
+    assert knock[80][0] == pytest.approx(8.0)
+    assert knock[81][2] == 0.0 and knock[81][4] == 0.0
+    assert all(knock[k][2] == 0.0 for k in range(80, 100))
+    assert knock[86][4] == pytest.approx(3.0)            # 4 frames of ringing, +-3 N
+    assert all(knock[k][4] == 0.0 for k in range(87, 100))
+    # the 20 ms push lasted 2 frames: over 2 frames it held, as loading (> 0)
+    short = ForceTorqueStream(config=replace(config, hold_frames=2), input_rate=100.0)
+    t, x = short.push(t=T0 + np.arange(n) / 100, force=pulse, torque=np.zeros((n, 3)))
+    assert x[np.round((t - T0) * 100).astype(int) == 81, -3][0] == pytest.approx(8.0)
+
+
 # --- streaming extractor ------------------------------------------------------------------
 
 def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
@@ -325,6 +365,7 @@ configs = st.builds(
     shift_min_frames=st.sampled_from([1, 3, 10]),
     shift_lag=st.sampled_from([1, 5, 20]),
     shift_window=st.sampled_from([1, 4, 40]),
+    hold_frames=st.sampled_from([1, 2, 4, 7]),
 )
 
 
@@ -569,6 +610,12 @@ def test_config_validation_names_the_field():
     with pytest.raises(ConfigError, match=r'wrench rate 20000 Hz is outside \[50, 10000\]'):
         StreamingFeatureExtractor(config=FeatureConfig(), audio_rate=16000, ft_input_rate=20000)
     assert FeatureConfig.from_dict(FeatureConfig().to_dict()) == FeatureConfig()
+    # hold_frames is written only when it is not the default (older model hashes stay)
+    assert 'hold_frames' not in FeatureConfig().to_dict()
+    held = FeatureConfig(hold_frames=6)
+    assert FeatureConfig.from_dict(held.to_dict()) == held
+    with pytest.raises(ConfigError, match='hold_frames'):
+        FeatureConfig(hold_frames=0)
     with pytest.raises(ConfigError, match='unknown'):
         FeatureConfig.from_dict({'bogus': 1})
 
