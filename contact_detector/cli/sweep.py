@@ -56,6 +56,7 @@ from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
+from contact_detector.training.protocol import check_min_samples_leaf
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE)
@@ -104,6 +105,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              f'; NAME{AUGMENTED}: the forests train on augmented wrenches, '
                              'see --augment-tare; the left-out family is never augmented)')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
+    parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
+                        help='--lofo: fewest training frames in a leaf of every forest '
+                             "(default 1, the paper's fully grown trees)")
     add_augmentation_arguments(parser)
     parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
                         help='--lofo: frames from this long after the onset are labelled '
@@ -152,6 +156,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.lofo:
         try:
             augmentation = augmentation_from_args(args)
+            check_min_samples_leaf(args.min_samples_leaf)
         except ContactDetectorError as err:
             parser.error(str(err))
         trials = {}
@@ -160,7 +165,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         output = lofo_study(trials=trials, settings=args.lofo_settings.split(','),
                             label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
                             label_start_s=args.lofo_label_start, seeds=args.seeds or (),
-                            augmentation=augmentation,
+                            augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
                             audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
                             jobs=args.jobs,
                             progress=lambda items: tqdm(items, desc='lofo', unit='setting'))

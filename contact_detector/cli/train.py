@@ -85,6 +85,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--trees', type=tree_counts, default=list(range(1, 11)), metavar='LIST',
                         help='candidate n_estimators, chosen by validation ROC AUC (default '
                              "1-10, the paper's; e.g. 1-10,20,50 or 50)")
+    parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
+                        help='fewest training frames in a leaf of every forest (default 1, the '
+                             "paper's: fully grown trees, pure leaves)")
     add_stream_arguments(parser)
     parser.add_argument('--no-events', action='store_true',
                         help='skip the event metrics on the test trials')
@@ -159,6 +162,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             sources=sources, config=config, labels=labels, rule=rule, trees=args.trees,
             seed=args.seed, jobs=args.jobs, events=not args.no_events,
             augmentation=(augmentation_from_args(args) if args.augment else None),
+            min_samples_leaf=args.min_samples_leaf,
             created=datetime.now(timezone.utc).isoformat(timespec='seconds'),
             progress=lambda items, desc: tqdm(items, desc=desc, unit='bag'), step=step,
             log=print)

@@ -29,7 +29,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence
 import warnings
 
 from contact_detector.detection.offline import run_features
-from contact_detector.errors import BagError
+from contact_detector.errors import BagError, ConfigError
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
@@ -172,11 +172,49 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def _forest(n: int, seed: int, jobs: int) -> Any:
+def check_min_samples_leaf(value: Any) -> int:
+    """
+    Return ``value`` as a forest's ``min_samples_leaf`` (an int >= 1) or raise ConfigError.
+
+    1 (the paper's protocol and scikit-learn's default) grows every tree until its leaves
+    are pure, so with ``n`` trees P(contact) takes the values ``k / n``; a larger value stops
+    splitting at leaves of that many frames, and a leaf then votes its fraction of contact.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f'min_samples_leaf must be an integer >= 1, got {value!r}')
+    return int(value)
+
+
+def make_forest(*, n_estimators: int, seed: int, jobs: int, min_samples_leaf: int = 1) -> Any:
+    """
+    Return the unfitted forest of the protocol: the one place every training path builds it.
+
+    Parameters
+    ----------
+    n_estimators : int
+        Trees.
+    seed, jobs : int
+        ``random_state``; joblib workers.
+    min_samples_leaf : int
+        Fewest training frames in a leaf (:func:`check_min_samples_leaf`); 1 = the paper's
+        fully grown trees.
+
+    Returns
+    -------
+    sklearn.ensemble.RandomForestClassifier
+        ``max_features = 'sqrt'``, everything else scikit-learn's defaults.
+
+    Raises
+    ------
+    ConfigError
+        ``min_samples_leaf`` is not an integer >= 1.
+
+    """
+    leaf = check_min_samples_leaf(min_samples_leaf)
     # scikit-learn is imported by training only (the detector runs on numpy arrays).
     from sklearn.ensemble import RandomForestClassifier
-    return RandomForestClassifier(n_estimators=n, max_features='sqrt', random_state=seed,
-                                  n_jobs=jobs)
+    return RandomForestClassifier(n_estimators=n_estimators, max_features='sqrt',
+                                  min_samples_leaf=leaf, random_state=seed, n_jobs=jobs)
 
 
 @dataclass
@@ -225,7 +263,7 @@ def split_indices(*, kind: str, y: np.ndarray, groups: np.ndarray,
 
 def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
               trial_names: Sequence[str], seed: int, jobs: int,
-              n_range: Sequence[int] = range(1, 11),
+              n_range: Sequence[int] = range(1, 11), min_samples_leaf: int = 1,
               progress: Optional[Callable[[str], None]] = None) -> SplitResult:
     """
     Run the paper's protocol on one split kind; the returned forest is refit on train + val.
@@ -246,6 +284,8 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
         Random seed; joblib workers for the forests.
     n_range : sequence of int
         Candidate ``n_estimators``.
+    min_samples_leaf : int
+        Of every forest (:func:`make_forest`).
     progress : callable or None
         Called with a short message after each step.
 
@@ -253,10 +293,23 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     -------
     SplitResult
 
+    Raises
+    ------
+    BagError
+        The labelled frames hold one class only.
+    ConfigError
+        ``min_samples_leaf`` is not an integer >= 1.
+
     """
     from sklearn.metrics import (accuracy_score, classification_report, confusion_matrix,
                                  roc_auc_score)
     from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
+
+    check_min_samples_leaf(min_samples_leaf)
+
+    def forest_of(n):
+        return make_forest(n_estimators=n, seed=seed, jobs=jobs,
+                           min_samples_leaf=min_samples_leaf)
 
     if np.unique(y).size < 2:
         raise BagError('the labelled frames contain only one class: check the truth topic or '
@@ -264,7 +317,7 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     train, val, test = split_indices(kind=kind, y=y, groups=groups, seed=seed)
     table = []
     for n in n_range:
-        forest = _forest(n, seed, jobs).fit(x[train], y[train])
+        forest = forest_of(n).fit(x[train], y[train])
         p = forest.predict_proba(x[val])[:, 1]
         auc = roc_auc_score(y[val], p) if np.unique(y[val]).size == 2 else float('nan')
         table.append({'n_estimators': n, 'accuracy': accuracy_score(y[val], p >= 0.5),
@@ -281,12 +334,12 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
                                      random_state=seed).split(x, y, groups)
     scores = []
     for fold_train, fold_test in folds:
-        forest = _forest(best, seed, jobs).fit(x[fold_train], y[fold_train])
+        forest = forest_of(best).fit(x[fold_train], y[fold_train])
         scores.append(accuracy_score(y[fold_test], forest.predict(x[fold_test])))
     if progress:
         progress(f'{kind} split: 10-fold CV accuracy {np.mean(scores):.5f}')
     fit_idx = np.concatenate([train, val])
-    forest = _forest(best, seed, jobs).fit(x[fit_idx], y[fit_idx])
+    forest = forest_of(best).fit(x[fit_idx], y[fit_idx])
     p_test = forest.predict_proba(x[test])[:, 1]
     pred = (p_test >= 0.5).astype(int)
     names = ['not contact', 'contact']

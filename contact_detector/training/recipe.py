@@ -39,7 +39,8 @@ from contact_detector.model.rule import DecisionRule
 from contact_detector.sim.bag_writer import write_trials
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
-from contact_detector.training.protocol import LabelWindow, run_split, trial_features
+from contact_detector.training.protocol import (check_min_samples_leaf, LabelWindow, run_split,
+                                                trial_features)
 import numpy as np
 
 #: Condition sets of the simulated trials ``--with-sim`` adds.
@@ -194,7 +195,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 csv_onsets: Optional[dict], manifest: dict, sources: dict,
                 config: FeatureConfig, labels: LabelWindow, rule: DecisionRule,
                 trees: Sequence[int], seed: int, jobs: int, events: bool, created: str,
-                augmentation: Optional[WrenchAugmentation] = None,
+                augmentation: Optional[WrenchAugmentation] = None, min_samples_leaf: int = 1,
                 progress: Callable[[Iterable, str], Iterable] = lambda items, _desc: items,
                 step: Callable[[str], None] = lambda _message: None,
                 log: Callable[[str], None] = lambda _line: None) -> TrainedModel:
@@ -232,6 +233,11 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         Vary each bag's wrench before its features, drawn from ``seed`` and the bag's name
         (:mod:`~contact_detector.training.augmentation`); None = as recorded. The card
         records it under ``training.augmentation``.
+    min_samples_leaf : int
+        Fewest training frames in a leaf of every forest
+        (:func:`~contact_detector.training.protocol.make_forest`): 1 (the paper's protocol)
+        grows the trees until their leaves are pure. The card records it under
+        ``training.min_samples_leaf`` (and ``forest.params``).
     progress, step, log
         ``progress(items, desc)`` wraps the bags of a long step, ``step(message)`` is called
         after each forest step, ``log(line)`` receives the summary line.
@@ -240,9 +246,13 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     ------
     BagError
         Fewer than :data:`MIN_RECORDINGS` bags.
+    ConfigError
+        ``min_samples_leaf`` is not an integer >= 1 (before any feature is computed).
 
     """
     from joblib import delayed, Parallel  # training only: scikit-learn's dependency
+
+    min_samples_leaf = check_min_samples_leaf(min_samples_leaf)
 
     bags = list(found)
     if len(bags) < MIN_RECORDINGS:
@@ -274,7 +284,8 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     results = {}
     for kind in ('sample', 'trial'):
         results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
-                                  seed=seed, jobs=jobs, n_range=trees, progress=step)
+                                  seed=seed, jobs=jobs, n_range=trees,
+                                  min_samples_leaf=min_samples_leaf, progress=step)
     quoted = results['trial']
     metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
                       'cv_accuracy_mean': r.cv_mean, 'cv_accuracy_sd': r.cv_sd,
@@ -284,6 +295,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
                 'conditions': sorted({t.condition for t in trials}),
                 'test_trials': quoted.test_trials, 'seed': seed,
+                'min_samples_leaf': min_samples_leaf,
                 'augmentation': augmentation.to_dict() if augmentation else None,
                 'audio_rate': sorted({s.audio_rate for s in found.values()}),
                 'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),

@@ -30,7 +30,7 @@ from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
-from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.training.sweep import (best_row, compute_frames, FeatureSetting,
                                              fit_forest, leave_one_family_out, model_rules,
@@ -197,7 +197,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
                label_start_s: float = 0.0,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
-               seeds: Sequence[int] = (),
+               seeds: Sequence[int] = (), min_samples_leaf: int = 1,
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
     Leave-one-family-out over the pooled trials; per setting and rule the worst family.
@@ -210,8 +210,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     ``seed`` and each trial's name); the left-out family is never augmented. With ``seeds``,
     every fold trains one forest per seed and each family's row pools the outcomes of all of
     them (``n`` trials x ``len(seeds)``), so that two settings are not told apart by one
-    forest's randomness; else one forest of ``seed``. Returns markdown.
+    forest's randomness; else one forest of ``seed``. Every forest has ``trees`` trees and
+    ``min_samples_leaf`` (1: fully grown, the paper's). Returns markdown.
     """
+    check_min_samples_leaf(min_samples_leaf)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
     frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=audio_rate,
                                  wrench_rate=wrench_rate, jobs=jobs).values())
@@ -238,7 +240,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
         for forest_seed in (seeds or (seed,)):
             for fold in leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                              n_estimators=trees, seed=forest_seed, jobs=jobs,
-                                             fit_frames=fit_frames if augmented else None):
+                                             fit_frames=fit_frames if augmented else None,
+                                             min_samples_leaf=min_samples_leaf):
                 for k, row in enumerate(fold.rows):
                     pooled.setdefault((k, fold.family), []).extend(row.outcomes)
         families = sorted({family for _, family in pooled})
@@ -261,7 +264,11 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                                f"{w['detected']}/{w['trials']} | {premature_text(w)} | "
                                f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
                                f'{total}/{trials_n} / {early} |')
+    forests = (f'Forests: {trees} trees, min_samples_leaf {min_samples_leaf}, '
+               f"seeds {', '.join(str(k) for k in (seeds or (seed,)))} (each family's row pools "
+               'them).')
     return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
+                      forests, '',
                       *worst_lines, '', '## Every family', '', *family_lines, ''])
 
 

@@ -37,7 +37,7 @@ from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import augment_events, trial_seed, WrenchAugmentation
-from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.protocol import LabelWindow, make_forest
 from joblib import delayed, Parallel
 import numpy as np
 from sklearn.ensemble import RandomForestClassifier
@@ -182,15 +182,19 @@ def _columns(setting: FeatureSetting) -> np.ndarray:
 
 
 def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_estimators: int,
-               seed: int, jobs: int) -> RandomForestClassifier:
-    """Train the paper's forest on the given trials."""
+               seed: int, jobs: int, min_samples_leaf: int = 1) -> RandomForestClassifier:
+    """
+    Train the protocol's forest on the given trials (:func:`~.protocol.make_forest`).
+
+    ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1.
+    """
     cols = _columns(setting)
     x = np.concatenate([f.x[:, cols] for f in frames])
     y = np.concatenate([frame_labels(t=f.t, onsets=[f.truth.onset_t],
                                      start_s=setting.label.start_s, end_s=setting.label.end_s)
                         for f in frames])
-    forest = RandomForestClassifier(n_estimators=n_estimators, max_features='sqrt',
-                                    random_state=seed, n_jobs=jobs)
+    forest = make_forest(n_estimators=n_estimators, seed=seed, jobs=jobs,
+                         min_samples_leaf=min_samples_leaf)
     return forest.fit(x, y)
 
 
@@ -325,8 +329,8 @@ class FamilyRow:
 def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetting,
                          rules: Sequence[DecisionRule], n_estimators: int, seed: int,
                          jobs: int, families: Optional[Sequence[str]] = None,
-                         fit_frames: Optional[Sequence[TrialFrames]] = None
-                         ) -> List[FamilyRow]:
+                         fit_frames: Optional[Sequence[TrialFrames]] = None,
+                         min_samples_leaf: int = 1) -> List[FamilyRow]:
     """
     Train on all families but one, score every rule on the one left out; once per family.
 
@@ -351,6 +355,8 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
         The frames the forests are trained on (e.g. the same trials augmented), grouped by
         the same families; default ``frames``. The left-out family is always scored on
         ``frames``.
+    min_samples_leaf : int
+        Of every fold's forest (as :func:`fit_forest`).
 
     Returns
     -------
@@ -367,7 +373,7 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
         if not test or not fit:
             continue
         forest = fit_forest(frames=fit, setting=setting, n_estimators=n_estimators, seed=seed,
-                            jobs=jobs)
+                            jobs=jobs, min_samples_leaf=min_samples_leaf)
         out.append(FamilyRow(family=family,
                              rows=score_rules(forest=forest, frames=test, setting=setting,
                                               rules=rules)))

@@ -671,3 +671,47 @@ def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, 
     assert train_cli.main([bags, '--augment', '--augment-tare', '1.5',
                            '--out', str(tmp_path / 'bad.npz')]) != 0
     assert 'tare_probability' in capsys.readouterr().err
+
+
+def test_train_min_samples_leaf_is_recorded_in_the_card_and_bad_values_are_refused(
+        data, tmp_path, capsys):
+    model = tmp_path / 'leaf.npz'
+    bags = str(data['bags'])
+    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '3',
+                           '--min-samples-leaf', '5', '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    card = json.loads(model.with_name('leaf.card.json').read_text())
+    assert bundle.training['min_samples_leaf'] == card['training']['min_samples_leaf'] == 5
+    assert card['forest']['params']['min_samples_leaf'] == 5
+    assert data['bundle'].training['min_samples_leaf'] == 1   # the default: the paper's
+
+    def impure_leaves(trees):
+        contact = trees.value[trees.feature == -2, 1]
+        return float(np.mean((contact > 1e-9) & (contact < 1 - 1e-9)))
+    # fully grown trees end in pure leaves (a vote count); leaves of at least five frames
+    # stop before the contact and free frames are apart, so many hold both
+    assert impure_leaves(data['bundle'].trees) < 0.01 < 0.1 < impure_leaves(bundle.trees)
+    for bad in ('0', '-2'):
+        assert train_cli.main([bags, '--min-samples-leaf', bad,
+                               '--out', str(tmp_path / 'bad.npz')]) != 0
+        assert 'min_samples_leaf must be an integer >= 1' in capsys.readouterr().err
+        with pytest.raises(SystemExit):
+            sweep_cli.main([bags, '--lofo', '--min-samples-leaf', bad])
+        assert 'min_samples_leaf must be an integer >= 1' in capsys.readouterr().err
+    assert not (tmp_path / 'bad.npz').exists()
+
+
+def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
+    bags = str(data['bags'])
+    out = tmp_path / 'lofo.md'
+    # leaves of more frames than the trials hold: every tree is its root, P(contact) is the
+    # share of contact frames everywhere, far below every rule's thresholds
+    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
+                           '--jobs', '1', '--min-samples-leaf', '1000000',
+                           '--out', str(out)]) == 0
+    text = out.read_text()
+    assert 'Forests: 2 trees, min_samples_leaf 1000000, seeds 0' in text
+    family_part = text.split('## Every family')[1]
+    rows = [[c.strip() for c in line.strip('|').split('|')]
+            for line in family_part.splitlines() if line.startswith('| shipped')]
+    assert rows and all(r[3].startswith('0/') and r[4].split()[0] == '0' for r in rows)
