@@ -239,10 +239,8 @@ def test_shift_features_do_not_depend_on_sensor_orientation_or_tare():
     assert frame[70][1] == pytest.approx(0.6)           # and 0.15 m x 4 N of torque
 
 
-def test_shift_min_tells_a_lasting_load_change_from_a_knock():
-    # a 20 ms knock of 8 N that rings back, against a touch that moves 3 N for good: the
-    # newest shift is large in both, its minimum over the last 10 frames only for the touch
-    n = 160
+def _knock_and_touch(n: int) -> tuple:
+    """(n, 3) forces holding 10 N: a 20 ms knock of 8 N that rings back; a 3 N touch for good."""
     force = np.zeros((n, 3))
     force[:, 2] = -10.0
     knock = force.copy()
@@ -250,6 +248,14 @@ def test_shift_min_tells_a_lasting_load_change_from_a_knock():
     knock[83:87, 2] += 3.0 * np.array([1, -1, 1, -1])
     touch = force.copy()
     touch[80:, 2] += 3.0
+    return knock, touch
+
+
+def test_shift_min_tells_a_lasting_load_change_from_a_knock():
+    # a 20 ms knock of 8 N that rings back, against a touch that moves 3 N for good: the
+    # newest shift is large in both, its minimum over the last 10 frames only for the touch
+    n = 160
+    knock, touch = _knock_and_touch(n)
     zero = np.zeros((n, 3))
     tk, xk = _shift_features(knock, zero)
     tt, xt = _shift_features(touch, zero)
@@ -268,13 +274,7 @@ def test_hold_features_see_that_a_load_change_stayed_and_a_knock_fell_back():
                                            'torque_change_hold', 'force_shift_hold'),
                            delta_window=1, hold_frames=4)
     n = 160
-    force = np.zeros((n, 3))
-    force[:, 2] = -10.0
-    knock = force.copy()
-    knock[80:82, 2] -= 8.0
-    knock[83:87, 2] += 3.0 * np.array([1, -1, 1, -1])
-    touch = force.copy()
-    touch[80:, 2] += 3.0
+    knock, touch = _knock_and_touch(n)
     seen = {}
     for name, f in (('knock', knock), ('touch', touch)):
         stream = ForceTorqueStream(config=config, input_rate=100.0)
