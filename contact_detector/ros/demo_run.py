@@ -134,7 +134,15 @@ def run_demo(*, trials: int, seed: int, out: Path, model: Path, figure: Path) ->
     collector = Collector(node)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
+    stop = threading.Event()
+
+    def spin() -> None:
+        # spin_once in a loop that ends on a flag, not executor.spin(): shutting an executor
+        # down while another thread waits in it can hang the process (ros2/rclpy#968), so the
+        # thread is stopped and joined before the executor is shut down.
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=0.05)
+    spinner = threading.Thread(target=spin, daemon=True)
     spinner.start()
     arm = node.create_client(SetBool, f'/{NODE_NAME}/arm')
     reset = node.create_client(Trigger, f'/{NODE_NAME}/reset')
@@ -185,7 +193,9 @@ def run_demo(*, trials: int, seed: int, out: Path, model: Path, figure: Path) ->
     except RuntimeError:
         pass
     finally:
-        executor.shutdown()
+        stop.set()
+        spinner.join(timeout=5.0)
+        executor.shutdown(timeout_sec=5.0)
         node.destroy_node()
         rclpy.try_shutdown()
         node_proc.terminate()
