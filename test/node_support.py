@@ -26,7 +26,8 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
-from typing import List, Optional
+import time
+from typing import Callable, List, Optional
 
 from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
@@ -155,3 +156,12 @@ def stamp(t: float):
     from builtin_interfaces.msg import Time
     sec = int(np.floor(t))
     return Time(sec=sec, nanosec=min(999_999_999, int(round((t - sec) * 1e9))))
+
+
+def spin_until(executor, predicate: Callable[[], bool], *, timeout: float = 10.0) -> None:
+    """Spin ``executor`` in 10 ms steps until ``predicate()``; fail after ``timeout`` s."""
+    end = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > end:
+            raise AssertionError('timed out waiting for the node')
+        executor.spin_once(timeout_sec=0.01)

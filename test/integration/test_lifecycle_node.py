@@ -95,10 +95,7 @@ class Manager:
         self.logs[:] = [log for log in self.logs if log.msg != 'test: rosout ready']
 
     def spin_until(self, predicate, timeout: float = 10.0) -> None:
-        end = time.monotonic() + timeout
-        while not predicate():
-            assert time.monotonic() < end, 'timed out'
-            self.executor.spin_once(timeout_sec=0.01)
+        node_support.spin_until(self.executor, predicate, timeout=timeout)
 
     def spin_for(self, seconds: float) -> None:
         end = time.monotonic() + seconds

@@ -27,7 +27,6 @@ from pathlib import Path
 import struct
 import subprocess
 import sys
-import time
 
 from contact_detector.detection.detector import ContactDetector
 from contact_detector.errors import ConfigError, ModelError
@@ -121,11 +120,7 @@ class Harness:
             self.io.get_publishers_info_by_topic('/release')) > 0)
 
     def spin_until(self, predicate, timeout=10.0):
-        end = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > end:
-                raise AssertionError('timed out waiting for the node')
-            self.executor.spin_once(timeout_sec=0.01)
+        node_support.spin_until(self.executor, predicate, timeout=timeout)
 
     def set_clock(self, t: float) -> None:
         self.clock_pub.publish(Clock(clock=stamp(t)))

@@ -85,11 +85,7 @@ class FtHarness:
                         and len(self.io.get_publishers_info_by_topic('/release')) > 0)
 
     def spin_until(self, predicate, timeout=10.0):
-        end = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > end:
-                raise AssertionError('timed out waiting for the node')
-            self.executor.spin_once(timeout_sec=0.01)
+        node_support.spin_until(self.executor, predicate, timeout=timeout)
 
     def spin_for(self, seconds: float) -> None:
         end = time.monotonic() + seconds

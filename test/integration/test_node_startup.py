@@ -156,10 +156,7 @@ class Watcher:
             self.executor.spin_once(timeout_sec=0.01)
 
     def spin_until(self, predicate, timeout: float = 10.0) -> None:
-        end = time.monotonic() + timeout
-        while not predicate():
-            assert time.monotonic() < end, 'timed out'
-            self.executor.spin_once(timeout_sec=0.01)
+        node_support.spin_until(self.executor, predicate, timeout=timeout)
 
     def lines(self, level: int, text: str) -> list:
         return [m.msg for m in self.logs if m.level == level and text in m.msg]
