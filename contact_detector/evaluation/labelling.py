@@ -199,6 +199,9 @@ class LabelSettings:
     busy_back_s: float = 0.3
     rise_k: float = 3.0
     fast_samples: int = 2
+    sharp_k: float = 7.0
+    sharp_prev: float = 2.0
+    sharp_back: float = 3.0
     audio_lo_s: float = -0.05
     audio_slow_lo_s: float = -0.08
     audio_hi_s: float = 0.03
@@ -524,6 +527,10 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # a rise that creeps out of the noise crosses the band late: a CUSUM of y finds where its
     # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
     n0 = m
+    # a sharp departure (a jump from the noise to sharp_k sigmas in one sample): the contact
+    # is inside the averaging period of sample m or the one before; a sound cannot precede it
+    sharp = (2 <= m < len(y) and y[m] >= s.sharp_k * sd
+             and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
     if sd <= s.busy_sigma:
         c = cusum_start(z=y[:max(r, m) + 1] / sd, start=j0, alarm_from=m, kappa=s.cusum_k,
                         h=s.cusum_h)
@@ -559,6 +566,8 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         # after a fast rise the F/T onset is good to a sample: a sound starting much earlier
         # is something else (a clatter, a knock)
         lo = s.audio_slow_lo_s if slow else max(s.audio_lo_s, -2.0 * dt)
+        if sharp:
+            lo = max(lo, float(t[m]) - s.sharp_back * dt - ft_onset)
         # the window reaches from before the onset to after where y left the band (sample m)
         around = max(ft_onset, float(t[m]) - 0.5 * dt)
         a_on, _ratio = audio_onset(audio=audio, rate=float(audio_rate), t0=float(audio_t0),
