@@ -202,6 +202,7 @@ class LabelSettings:
     sharp_k: float = 7.0
     sharp_prev: float = 2.0
     sharp_back: float = 3.0
+    gradual_s: float = 0.06
     audio_lo_s: float = -0.05
     audio_slow_lo_s: float = -0.08
     audio_hi_s: float = 0.03
@@ -544,7 +545,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         # is late by up to the oscillation's size; a ramp fitted through it averages it out
         k_start = max(0, m - int(round(s.busy_back_s / dt)))
         ft_onset = hinge_fit(t=t[k_start:r + 1], y=y[k_start:r + 1], dt=dt,
-                             lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
+                             lo=float(t[k_start]), hi=float(t[m]))[0]
     elif e - m >= s.fast_samples:
         k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
@@ -558,6 +559,16 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         knee = hinge_fit(t=t[k_start:k_end + 1], y=y[k_start:k_end + 1], dt=dt,
                          lo=float(t[n0]) - s.cusum_back_s, hi=float(t[n0]), powers=(1,))[0]
         ft_onset = min(ft_onset, knee)
+    else:
+        # a rise that is steep at first but gradual (soft surfaces: a quarter of the change
+        # takes gradual_s or longer) starts anywhere in the sample before sample n0: the
+        # hinge through its first samples places it (a stiff contact's impact keeps the middle)
+        quarter = np.nonzero(y[m:b] >= 0.25 * float(np.linalg.norm(change)))[0]
+        if len(quarter) and int(quarter[0]) >= round(s.gradual_s / dt):
+            k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
+            k_end = min(len(y) - 1, m + 2)
+            ft_onset = hinge_fit(t=t[k_start:k_end + 1], y=y[k_start:k_end + 1], dt=dt,
+                                 lo=float(t[n0]) - dt, hi=float(t[n0]))[0]
     slow = sd > s.busy_sigma or e - m >= s.fast_samples
     confidence = min(1.0, peak / 20.0) * max(clarity, 0.0)
     onset, source, a_on = ft_onset, 'ft', None
