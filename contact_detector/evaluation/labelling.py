@@ -545,7 +545,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         # is late by up to the oscillation's size; a ramp fitted through it averages it out
         k_start = max(0, m - int(round(s.busy_back_s / dt)))
         ft_onset = hinge_fit(t=t[k_start:r + 1], y=y[k_start:r + 1], dt=dt,
-                             lo=float(t[k_start]), hi=float(t[m]))[0]
+                             lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
     elif e - m >= s.fast_samples:
         k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
