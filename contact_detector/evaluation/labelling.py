@@ -203,6 +203,9 @@ class LabelSettings:
     sharp_prev: float = 2.0
     sharp_back: float = 3.0
     gradual_s: float = 0.06
+    audio_dominance: float = 10.0
+    audio_gap: int = 3
+    audio_peak_frames: int = 5
     audio_lo_s: float = -0.05
     audio_slow_lo_s: float = -0.08
     audio_hi_s: float = 0.03
@@ -419,21 +422,30 @@ def audio_onset(*, audio: np.ndarray, rate: float, t0: float, around: float,
     nf = (len(noise) // fl) * fl
     floor = float(np.median(np.mean(noise[:nf].reshape(-1, fl) ** 2, axis=1)))
     floor = max(floor, 1e-20)
-    seg = x[w0:w1 + 4 * fl]
+    seg = x[w0:min(len(x), w1 + max(4, s.audio_peak_frames) * fl)]
     m = (len(seg) // fl) * fl
     power = np.mean(seg[:m].reshape(-1, fl) ** 2, axis=1) / floor
     n_win = max(1, (w1 - w0) // fl)
     ratio = float(power[:n_win + 1].max()) if len(power) else 0.0
     hot = power > s.audio_rise
-    for k in range(min(n_win, len(power) - 4)):
-        if hot[k] and power[k:k + 4].mean() > s.audio_hold * s.audio_rise:
-            med = np.median(noise)
-            sd = max(1.4826 * float(np.median(np.abs(noise - med))), 1e-12)
-            a = max(w0 + (k - 1) * fl, 0)
-            seg2 = np.abs(x[a:w0 + (k + 1) * fl] - med)
-            over = np.nonzero(seg2 > s.audio_k * sd)[0]
-            j = a + (int(over[0]) if len(over) else fl)
-            return t0 + j / rate, ratio
+    # the sounds starting in the window: the first frame that holds the rise, then each one
+    # after audio_gap frames under it (a new event, not the same sound's ring)
+    starts = [k for k in range(min(n_win, len(power) - 4))
+              if hot[k] and power[k:k + 4].mean() > s.audio_hold * s.audio_rise]
+    starts = [k for i, k in enumerate(starts)
+              if i == 0 or not np.any(hot[max(0, k - s.audio_gap):k])]
+    if starts:
+        # the contact is the dominant sound: one more than audio_dominance times weaker than
+        # a later one (a knock, a transient of the room) is passed over
+        peaks = [float(power[k:k + s.audio_peak_frames].max()) for k in starts]
+        k = next(k for k, pk in zip(starts, peaks) if pk * s.audio_dominance >= max(peaks))
+        med = np.median(noise)
+        sd = max(1.4826 * float(np.median(np.abs(noise - med))), 1e-12)
+        a = max(w0 + (k - 1) * fl, 0)
+        seg2 = np.abs(x[a:w0 + (k + 1) * fl] - med)
+        over = np.nonzero(seg2 > s.audio_k * sd)[0]
+        j = a + (int(over[0]) if len(over) else fl)
+        return t0 + j / rate, ratio
     return None, ratio
 
 
