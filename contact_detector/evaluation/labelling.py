@@ -203,6 +203,7 @@ class LabelSettings:
     sharp_prev: float = 2.0
     sharp_back: float = 3.0
     gradual_s: float = 0.06
+    step_back_samples: float = 1.5
     audio_dominance: float = 10.0
     audio_gap: int = 3
     audio_peak_frames: int = 5
@@ -560,8 +561,13 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
                              lo=float(t[k_start]), hi=float(t[m]), powers=(1,))[0]
     elif e - m >= s.fast_samples:
         k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
+        # a rise whose first sample out stands spike_k sigmas clear of a baseline still in
+        # the noise stepped out: it started within step_back_samples before that sample
+        stepped = (n0 == m and m >= 2 and y[m] >= s.spike_k * sd
+                   and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
+        back = s.step_back_samples if stepped else s.back_samples
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
-                             lo=float(t[n0]) - s.back_samples * dt, hi=float(t[n0]))[0]
+                             lo=float(t[n0]) - back * dt, hi=float(t[n0]))[0]
         # the knee of flat-then-linear over the whole early rise (to knee_frac of the
         # change) averages the noise of many samples: on a rise that creeps out of the noise
         # it finds the start that the short fit, limited to back_samples, cannot reach
