@@ -15,6 +15,9 @@
 """
 Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
+Also: sounds before a sharp F/T departure, the dominant sound in the window, the onset of a
+gradual soft rise inside its first sample and of a rise that steps out of the noise.
+
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
 axis. The load acts along -z with a lever arm, so force and torque change together. The audio
@@ -140,3 +143,79 @@ def test_a_faint_click_before_a_stiff_contact_is_not_its_onset(seed):
                       audio_t0=0.0)
     assert p.source == 'ft'
     assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
+
+
+def _sounds(*, seed: int, events: tuple) -> np.ndarray:
+    """Return 6 s of noise (sd 0.01) plus ``(start s, power ratio, decay s)`` noise bursts."""
+    rng = np.random.default_rng(seed + 100)
+    x = rng.normal(0.0, 0.01, int(6.0 * AUDIO_RATE))
+    n = int(0.03 * AUDIO_RATE)
+    for start, ratio, decay_s in events:
+        k = int(start * AUDIO_RATE)
+        x[k:k + n] += (rng.normal(0.0, 0.01 * np.sqrt(ratio - 1.0), n)
+                       * np.exp(-np.arange(n) / (decay_s * AUDIO_RATE)))
+    return x
+
+
+def _bump_then(*, peak: float, width: float, slope: float, lag: float, top: float,
+               delay: float = 0.0):
+    """Return an impact's half-sine bump (N, s) and a lagged ramp to ``top`` N, from ``delay``."""
+    def load(tau: np.ndarray) -> np.ndarray:
+        tau = np.maximum(tau - delay, 0.0)
+        bump = np.where(tau < width, peak * np.sin(np.pi * tau / width), 0.0)
+        ramp = np.minimum(slope * tau * (1.0 - np.exp(-tau / max(lag, 1e-9))), top)
+        return np.where(tau > 0.0, bump + ramp, 0.0)
+    return load
+
+
+@pytest.mark.parametrize('seed', [0, 3])
+def test_a_sound_well_before_a_sharp_departure_is_not_the_contact(seed):
+    # the F/T jumps from the noise to 8 sigma in one sample (a 3 ms impact), then creeps:
+    # a slow rise, whose sound was looked for from 80 ms before. A knock 60 ms before, as
+    # loud as the contact, was taken; a sound cannot precede a sharp departure, the one at
+    # the contact (2 ms of travel) is the onset
+    t, force, torque = _wrench(_bump_then(peak=4.0, width=0.003, slope=5.0, lag=0.0, top=8.0),
+                               seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET - 0.06, 200.0, 0.005),
+                                       (ONSET + 0.002, 200.0, 0.005)))
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'audio'
+    assert 0.0 <= p.onset_t - ONSET <= 0.005, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 1])
+def test_the_dominant_sound_is_the_contact_not_a_faint_one_before_it(seed):
+    # a slow transfer's sound window opens 80 ms before its F/T onset: a click 10 times the
+    # noise's power 45 ms before the contact was taken; the contact's sound is 2000 times
+    t, force, torque = _wrench(_transfer(6.0), seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET - 0.045, 10.0, 0.015),
+                                       (ONSET + 0.002, 2000.0, 0.01)))
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'audio'
+    assert 0.0 <= p.onset_t - ONSET <= 0.005, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 1, 4])
+def test_a_gradual_soft_rise_is_placed_inside_its_first_sample(seed):
+    # a soft surface: a small impact bump, then a lagged ramp to 40 N (a quarter of the change
+    # after more than 60 ms); the contact is 0.5 ms into a sample period. The middle of the
+    # first sample out was 4.5 ms late; the hinge through the first samples is within 2 ms
+    delay = 0.0068
+    t, force, torque = _wrench(_bump_then(peak=1.5, width=0.03, slope=60.0, lag=0.08, top=40.0,
+                                          delay=delay), seed=seed)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET - delay) <= 0.002, (p.onset_t - ONSET - delay) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 1])
+def test_a_rise_that_steps_out_of_the_noise_is_not_extrapolated_two_samples_back(seed):
+    # a 15 ms bump puts the first sample out 5-7 sigma clear of a quiet baseline, then the
+    # load creeps: the short hinge reached 2 samples back (8.7 ms early); the contact is
+    # within 1.5 samples of that sample
+    delay = 0.005
+    t, force, torque = _wrench(_bump_then(peak=0.6, width=0.015, slope=40.0, lag=0.05, top=20.0,
+                                          delay=delay), seed=seed)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET - delay) <= 0.005, (p.onset_t - ONSET - delay) * 1e3
