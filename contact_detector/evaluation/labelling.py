@@ -43,7 +43,11 @@ which must decide causally, this sees the whole recording and works in three ste
    ``y`` started to climb, the sample after its last zero; that sample ``n0`` replaces ``m``
    if it is earlier and at most ``cusum_back_s`` before it (else ``n0 = m``). If ``y`` then
    reaches ``rise_k k_sigma sigma_y`` within ``fast_samples`` samples of ``m`` (a stiff
-   contact) the onset is the middle of sample ``n0``'s averaging period, ``t_n0 - dt / 2``.
+   contact) the onset is the middle of sample ``n0``'s averaging period, ``t_n0 - dt / 2``,
+   unless the rise, steep at first, is gradual after it (a soft surface: ``y`` takes
+   ``gradual_s`` or longer from ``m`` to a quarter of the change): then the hinge below,
+   fitted up to sample ``m + 2`` with ``t0`` in ``[t_n0 - dt, t_n0]``, places it inside the
+   sample (a stiff contact's impact, all in one sample, keeps the middle).
    Otherwise (a soft or compliant contact, whose load rises slowly) a hinge
    ``y_j = c + a g_p(t_j; t0)``, ``a >= 0``, is fitted by least squares from ``fit_pre_s``
    before ``n0`` to that level, where ``g_p`` is the ramp ``(t - t0)_+^p`` (p = 1 or 2)
@@ -53,7 +57,9 @@ which must decide causally, this sees the whole recording and works in three ste
 
    and ``t0`` is searched in ``[t_n0 - back_samples dt, t_n0]`` on a grid of ``dt / 20``
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
-   winning. That short fit cannot reach back past ``back_samples`` on a rise that creeps out
+   winning; a rise that *steps out* of the noise (sample ``m`` at ``spike_k`` sigma or more,
+   the two before it within ``sharp_prev`` sigma, the CUSUM not moving it) started within
+   ``step_back_samples`` (1.5) sample periods of ``t_m``. That short fit cannot reach back past ``back_samples`` on a rise that creeps out
    of the noise, so a second, linear (p = 1) hinge, the knee of flat-then-rising, is fitted
    over the whole early rise, from ``knee_pre_s`` before ``n0`` (not before the baseline
    window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
@@ -71,7 +77,14 @@ which must decide causally, this sees the whole recording and works in three ste
    before ``t_m - dt / 2``, the window's end stays at ``t_m - dt / 2 + audio_hi_s`` (the
    earlier onset widens the window, it does not move a sound out of it). A sound sets the
    time (audio has sample resolution); the sound's travel time from the hand to the
-   microphone is unknown and not removed. After a slow or busy rise (step 2's hinge fits),
+   microphone is unknown and not removed. When the window holds several sounds (each
+   starting after ``audio_gap`` frames under the level), the first whose peak power over
+   ``audio_peak_frames`` frames is at least ``1 / audio_dominance`` of the loudest one's is
+   the contact: a sound 10 times weaker than a later one in the window is a knock or a
+   transient of the room. A contact sound and its force change start at the same instant,
+   so after a *sharp departure* (sample ``m`` at ``sharp_k`` sigma or more, the two before it
+   within ``sharp_prev`` sigma: the contact is inside sample ``m``'s period or the one
+   before) the window starts no earlier than ``t_m - sharp_back dt``. After a slow or busy rise (step 2's hinge fits),
    which are found late rather than early, the window starts at ``audio_slow_lo_s``; after
    a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``. Without a sound
    in that window, a strong one (``audio_strong`` times the floor, +15 dB) in
@@ -178,6 +191,27 @@ class LabelSettings:
         change.
     knee_pre_s : float
         The knee fit starts this long before sample ``n0`` (not before the baseline window).
+    sharp_k, sharp_prev : float
+        A sharp departure: sample ``m`` at ``sharp_k`` robust standard deviations or more, the
+        two samples before it within ``sharp_prev``; ``sharp_prev`` also bounds the two
+        samples before a rise that steps out of the noise.
+    sharp_back : float
+        After a sharp departure no sound starts more than this many sample periods before
+        ``t_m`` (the contact is in sample ``m``'s period or the one before, plus the sound's
+        travel time).
+    gradual_s : float
+        A fast rise whose ``y`` takes this long or longer from sample ``m`` to a quarter of
+        the change is gradual: a hinge places its onset inside the sample before ``n0``.
+    step_back_samples : float
+        The short hinge of a rise that steps out of the noise (sample ``m`` at ``spike_k``
+        sigma or more) searches its onset up to this many sample periods before ``t_m``.
+    audio_dominance : float
+        A sound whose peak power is more than this many times weaker than a later sound's in
+        the window is passed over.
+    audio_gap : int
+        A sound starting after this many frames under ``audio_rise`` is a new one.
+    audio_peak_frames : int
+        A sound's peak power is its largest frame power over this many frames from its start.
 
     """
 
@@ -538,13 +572,13 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     level_hi = min(s.rise_k * s.k_sigma * sd, 0.5 * float(np.linalg.norm(change)))
     above = np.nonzero(y[m:b] >= level_hi)[0]
     e = m + (int(above[0]) if len(above) else 0)
-    # a rise that creeps out of the noise crosses the band late: a CUSUM of y finds where its
-    # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
-    n0 = m
     # a sharp departure (a jump from the noise to sharp_k sigmas in one sample): the contact
     # is inside the averaging period of sample m or the one before; a sound cannot precede it
     sharp = (2 <= m < len(y) and y[m] >= s.sharp_k * sd
              and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
+    # a rise that creeps out of the noise crosses the band late: a CUSUM of y finds where its
+    # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
+    n0 = m
     if sd <= s.busy_sigma:
         c = cusum_start(z=y[:max(r, m) + 1] / sd, start=j0, alarm_from=m, kappa=s.cusum_k,
                         h=s.cusum_h)
