@@ -62,8 +62,8 @@ which must decide causally, this sees the whole recording and works in three ste
    ``step_back_samples`` (1.5) sample periods of ``t_m``. That short fit cannot reach back
    past ``back_samples`` on a rise that creeps out of the noise, so a second, linear (p = 1)
    hinge, the knee of flat-then-rising, is fitted over the whole early rise, from
-   ``knee_pre_s`` before ``n0`` (not before the baseline window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
-   ``[t_n0 - cusum_back_s, t_n0]``; the earlier of the two onsets is kept. On a busy
+   ``knee_pre_s`` before ``n0`` (not before the baseline window) to where ``y`` reaches
+   ``knee_frac`` of the change, with ``t0`` in ``[t_n0 - cusum_back_s, t_n0]``; the earlier of the two onsets is kept. On a busy
    baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times the sensor's noise,
    where the ``k_sigma`` band is late by the oscillation's size) a linear hinge through the
    ``busy_back_s`` before ``m`` up to where the search started sets ``t0`` anywhere in that
@@ -87,8 +87,8 @@ which must decide causally, this sees the whole recording and works in three ste
    before) the window starts no earlier than ``t_m - sharp_back dt``. After a slow or busy
    rise (step 2's hinge fits), which are found late rather than early, the window starts at
    ``audio_slow_lo_s``; after a fast rise (F/T onset good to a sample) at
-   ``max(audio_lo_s, -2 dt)``. Without a sound in that window, a strong one (``audio_strong`` times the floor, +15 dB) in
-   ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its
+   ``max(audio_lo_s, -2 dt)``. Without a sound in that window, a strong one
+   (``audio_strong`` times the floor, +15 dB) in ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its
    baseline before the contact (a push on the object, a brush, the approach's deceleration),
    and a loud impact just after is the contact, which the F/T step alone would put tens of
    ms early. After a rise that creeps out of the noise (calm baseline, ``y`` takes at least
