@@ -56,47 +56,45 @@ which must decide causally, this sees the whole recording and works in three ste
    .. math:: g_p(t_j; t_0) = \frac{(t_j - t_0)_+^{p+1} - (t_j - dt - t_0)_+^{p+1}}{(p+1)\,dt}
 
    and ``t0`` is searched in ``[t_n0 - back_samples dt, t_n0]`` on a grid of ``dt / 20``
-   (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual
-   winning; a rise that *steps out* of the noise (sample ``m`` at ``spike_k`` sigma or more,
-   the two before it within ``sharp_prev`` sigma, the CUSUM not moving it) started within
-   ``step_back_samples`` (1.5) sample periods of ``t_m``. That short fit cannot reach back
-   past ``back_samples`` on a rise that creeps out of the noise, so a second, linear (p = 1)
-   hinge, the knee of flat-then-rising, is fitted over the whole early rise, from
-   ``knee_pre_s`` before ``n0`` (not before the baseline window) to where ``y`` reaches
-   ``knee_frac`` of the change, with ``t0`` in ``[t_n0 - cusum_back_s, t_n0]``; the earlier of the two onsets is kept. On a busy
-   baseline (``sigma_y > busy_sigma``: motor ripple or slosh many times the sensor's noise,
-   where the ``k_sigma`` band is late by the oscillation's size) a linear hinge through the
-   ``busy_back_s`` before ``m`` up to where the search started sets ``t0`` anywhere in that
-   span.
-3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared
-   with its noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame
-   in ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the
-   floor, with the mean of it and the next three frames above ``audio_hold`` times that,
-   marks a sound; its onset is the first sample in that frame or the one before with
-   ``|x - median| > audio_k * sigma_noise`` (MAD-based). When the CUSUM moved the F/T onset
-   before ``t_m - dt / 2``, the window's end stays at ``t_m - dt / 2 + audio_hi_s`` (the
-   earlier onset widens the window, it does not move a sound out of it). A sound sets the
-   time (audio has sample resolution); the sound's travel time from the hand to the
-   microphone is unknown and not removed. When the window holds several sounds (each
-   starting after ``audio_gap`` frames under the level), the first whose peak power over
-   ``audio_peak_frames`` frames is at least ``1 / audio_dominance`` of the loudest one's is
-   the contact: a sound 10 times weaker than a later one in the window is a knock or a
-   transient of the room. A contact sound and its force change start at the same instant,
-   so after a *sharp departure* (sample ``m`` at ``sharp_k`` sigma or more, the two before it
-   within ``sharp_prev`` sigma: the contact is inside sample ``m``'s period or the one
-   before) the window starts no earlier than ``t_m - sharp_back dt``. After a slow or busy
-   rise (step 2's hinge fits), which are found late rather than early, the window starts at
-   ``audio_slow_lo_s``; after a fast rise (F/T onset good to a sample) at
-   ``max(audio_lo_s, -2 dt)``. Without a sound in that window, a strong one
-   (``audio_strong`` times the floor, +15 dB) in ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its
-   baseline before the contact (a push on the object, a brush, the approach's deceleration),
-   and a loud impact just after is the contact, which the F/T step alone would put tens of
-   ms early. After a rise that creeps out of the noise (calm baseline, ``y`` takes at least
-   ``faint_samples`` samples from sample ``m`` to the fast-rise level), which is found late,
-   a faint click (``audio_faint`` times the floor, +5 dB) from ``audio_slow_lo_s`` before
-   the F/T onset up to it sets the time when no sound was found; one after the F/T onset
-   adds nothing (a dull thud crosses the level late), and after a fast or busy rise a faint
-   sound is more likely something else (a knock, noise).
+   (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual winning; a
+   rise that *steps out* of the noise (sample ``m`` at ``spike_k`` sigma or more, the two before it
+   within ``sharp_prev`` sigma, the CUSUM not moving it) started within ``step_back_samples`` (1.5)
+   sample periods of ``t_m``. That short fit cannot reach back past ``back_samples`` on a rise that
+   creeps out of the noise, so a second, linear (p = 1) hinge, the knee of flat-then-rising, is
+   fitted over the whole early rise, from ``knee_pre_s`` before ``n0`` (not before the baseline
+   window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
+   ``[t_n0 - cusum_back_s, t_n0]``; the earlier of the two onsets is kept. On a busy baseline
+   (``sigma_y > busy_sigma``: motor ripple or slosh many times the sensor's noise, where the
+   ``k_sigma`` band is late by the oscillation's size) a linear hinge through the ``busy_back_s``
+   before ``m`` up to where the search started sets ``t0`` anywhere in that span.
+3. **The contact sound.** If there is audio, its power in ``frame_s`` frames is compared with its
+   noise floor (median power over ``[t0 - 0.35 s, t0 - 0.06 s]``). The first frame in
+   ``[t0 + audio_lo_s, t0 + audio_hi_s]`` whose power exceeds ``audio_rise`` times the floor, with
+   the mean of it and the next three frames above ``audio_hold`` times that, marks a sound; its
+   onset is the first sample in that frame or the one before with
+   ``|x - median| > audio_k * sigma_noise`` (MAD-based). When the CUSUM moved the F/T onset before
+   ``t_m - dt / 2``, the window's end stays at ``t_m - dt / 2 + audio_hi_s`` (the earlier onset
+   widens the window, it does not move a sound out of it). A sound sets the time (audio has sample
+   resolution); the sound's travel time from the hand to the microphone is unknown and not removed.
+   When the window holds several sounds (each starting after ``audio_gap`` frames under the level),
+   the first whose peak power over ``audio_peak_frames`` frames is at least ``1 / audio_dominance``
+   of the loudest one's is the contact: a sound 10 times weaker than a later one in the window is a
+   knock or a transient of the room. A contact sound and its force change start at the same
+   instant, so after a *sharp departure* (sample ``m`` at ``sharp_k`` sigma or more, the two before
+   it within ``sharp_prev`` sigma: the contact is inside sample ``m``'s period or the one before)
+   the window starts no earlier than ``t_m - sharp_back dt``. After a slow or busy rise (step 2's
+   hinge fits), which are found late rather than early, the window starts at ``audio_slow_lo_s``;
+   after a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``. Without a sound in
+   that window, a strong one (``audio_strong`` times the floor, +15 dB) in
+   ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its baseline
+   before the contact (a push on the object, a brush, the approach's deceleration), and a loud
+   impact just after is the contact, which the F/T step alone would put tens of ms early. After a
+   rise that creeps out of the noise (calm baseline, ``y`` takes at least ``faint_samples`` samples
+   from sample ``m`` to the fast-rise level), which is found late, a faint click (``audio_faint``
+   times the floor, +5 dB) from ``audio_slow_lo_s`` before the F/T onset up to it sets the time
+   when no sound was found; one after the F/T onset adds nothing (a dull thud crosses the level
+   late), and after a fast or busy rise a faint sound is more likely something else (a knock,
+   noise).
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
