@@ -199,7 +199,7 @@ class LabelSettings:
         travel time).
     gradual_s : float
         A fast rise whose ``y`` takes this long or longer from sample ``m`` to a quarter of
-        the change is gradual: a hinge places its onset inside the sample before ``n0``.
+        the change is gradual: a hinge places its onset inside sample ``n0``'s period.
     step_back_samples : float
         The short hinge of a rise that steps out of the noise (sample ``m`` at ``spike_k``
         sigma or more) searches its onset up to this many sample periods before ``t_m``.
@@ -611,7 +611,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         ft_onset = min(ft_onset, knee)
     else:
         # a rise that is steep at first but gradual (soft surfaces: a quarter of the change
-        # takes gradual_s or longer) starts anywhere in the sample before sample n0: the
+        # takes gradual_s or longer) starts anywhere in sample n0's averaging period: the
         # hinge through its first samples places it (a stiff contact's impact keeps the middle)
         quarter = np.nonzero(y[m:b] >= 0.25 * float(np.linalg.norm(change)))[0]
         if len(quarter) and int(quarter[0]) >= round(s.gradual_s / dt):
