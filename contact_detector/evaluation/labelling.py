@@ -41,7 +41,11 @@ which must decide causally, this sees the whole recording and works in three ste
    (Page's test, :func:`cusum_start`: ``S_j = max(0, S_(j-1) + z_j - cusum_k)`` from the
    baseline window on, alarm at ``S > cusum_h`` from sample ``m`` on) marks where the mean of
    ``y`` started to climb, the sample after its last zero; that sample ``n0`` replaces ``m``
-   if it is earlier and at most ``cusum_back_s`` before it (else ``n0 = m``). If ``y`` then
+   if it is earlier and at most ``cusum_back_s`` before it (else ``n0 = m``). After a *jump*
+   (sample ``m`` at ``jump_k`` sigma or more, the two before it inside the band: an impact) it
+   may be one sample before ``m`` at most: a ramp from the band to ``jump_k`` sigma in one
+   sample started within sample ``m - 1``'s period, and the excursions inside the band before
+   it are vibration or noise, not a creeping rise. If ``y`` then
    reaches ``rise_k k_sigma sigma_y`` within ``fast_samples`` samples of ``m`` (a stiff
    contact) the onset is the middle of sample ``n0``'s averaging period, ``t_n0 - dt / 2``,
    unless the rise, steep at first, is gradual after it (a soft surface: ``y`` takes
@@ -197,6 +201,9 @@ class LabelSettings:
         After a sharp departure no sound starts more than this many sample periods before
         ``t_m`` (the contact is in sample ``m``'s period or the one before, plus the sound's
         travel time).
+    jump_k : float
+        A jump: sample ``m`` at ``jump_k`` robust standard deviations or more, the two before
+        it within ``k_sigma``; the CUSUM then moves the onset one sample back at most.
     gradual_s : float
         A fast rise whose ``y`` takes this long or longer from sample ``m`` to a quarter of
         the change is gradual: a hinge places its onset inside sample ``n0``'s period.
@@ -234,6 +241,7 @@ class LabelSettings:
     sharp_k: float = 7.0
     sharp_prev: float = 2.0
     sharp_back: float = 3.0
+    jump_k: float = 14.0
     gradual_s: float = 0.06
     step_back_samples: float = 1.5
     audio_dominance: float = 10.0
@@ -574,13 +582,19 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # is inside the averaging period of sample m or the one before; a sound cannot precede it
     sharp = (2 <= m < len(y) and y[m] >= s.sharp_k * sd
              and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
+    # a jump (sample m jump_k sigmas out, the two before it inside the band) is an impact:
+    # the contact is in sample m's averaging period or the one before, and excursions inside
+    # the band before them are vibration or noise, not the start of a creeping rise
+    jump = (2 <= m < len(y) and y[m] >= s.jump_k * sd
+            and max(y[m - 1], y[m - 2]) <= s.k_sigma * sd)
     # a rise that creeps out of the noise crosses the band late: a CUSUM of y finds where its
     # mean started to climb, up to cusum_back_s before sample m (calm baselines only)
     n0 = m
     if sd <= s.busy_sigma:
         c = cusum_start(z=y[:max(r, m) + 1] / sd, start=j0, alarm_from=m, kappa=s.cusum_k,
                         h=s.cusum_h)
-        if c is not None and c < m and t[m] - t[c] <= s.cusum_back_s:
+        if (c is not None and c < m and t[m] - t[c] <= s.cusum_back_s
+                and not (jump and c < m - 1)):
             n0 = c
     # fast rise: the onset is within the averaging period of sample n0 (its middle); slow
     # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
