@@ -16,7 +16,7 @@
 Why the F/T-only model is slower on trials with a knock on the hand: latency per knocked trial.
 
     .venv/bin/python benchmarks/knock_latency.py DIR... --model models/contact_forest_ft.npz
-        [--trials] [--jobs 2]
+        [--pool] [--trials] [--jobs 2]
 
 Scores the model's own rule on every simulated trial of the folders (the same frames,
 P(contact) and release logic as ``contact-detector sweep --model M --knocks``) and prints
@@ -24,14 +24,17 @@ P(contact) and release logic as ``contact-detector sweep --model M --knocks``) a
 - per condition set: trials and median latency of the caught trials, with and without a
   knock on the hand in the air (a within-condition comparison: the knocked trials are not
   spread evenly over the condition sets);
-- the knocked trials by the time from their newest knock to the onset (within the
-  ``change_max_frames`` window of ``*_change_max`` / ``*_shift_max`` or older), with the
-  largest ``force_change_max`` in the frames before the onset;
+- the trials by the time from their newest knock to the onset (inside the
+  ``change_max_frames`` window of ``*_change_max`` / ``*_shift_max``, inside the 0.64 s F/T
+  window, or older): caught, early, median latency, the median excess over the trial's
+  condition set's median without a knock, how many the slow path released, and the largest
+  ``force_change_max`` in the 50 ms before the onset;
 - with ``--trials``, one line per knocked trial: condition, knock-to-onset time, latency, the
   path that released (fast: P >= threshold; slow: the mean of the last frames) and the highest
   P(contact) in the first 50 ms after the onset.
 
 Latency is release - onset of the caught trials (``detected``); the medians are over those.
+``--pool`` reports the trials of every folder together.
 """
 
 import argparse
@@ -108,34 +111,38 @@ def report(rows: list, *, window_s: float, per_trial: bool) -> str:
         no = [r['latency'] for r in rs if not r['knocked'] and r['verdict'] == 'detected']
         text.append(f'| {cond} | {len(rs)} | {sum(r["knocked"] for r in rs)} | {len(kn)} | '
                     f'{median_ms(kn)} | {len(no)} | {median_ms(no)} |')
-    text += ['', '| knocked trials: newest knock before the onset | trials | caught | early | '
-             'median [ms] | released by the slow path | median force_change_max, 50 ms '
-             'before the onset [N] |', '|---|---|---|---|---|---|---|']
-    knocked = [r for r in rows if r['knocked']]
-    groups = [(f'< {window_s:.2f} s (inside the maximum window)',
-               lambda g: g < window_s),
-              (f'>= {window_s:.2f} s', lambda g: g >= window_s),
-              ('none before the onset', lambda g: np.isnan(g))]
-    for label, test in groups:
-        rs = [r for r in knocked if test(r['knock_gap'])]
-        lat = [r['latency'] for r in rs if r['verdict'] == 'detected']
+    cond_median = {c: np.median([r['latency'] for r in rs
+                                 if not r['knocked'] and r['verdict'] == 'detected'] or [np.nan])
+                   for c, rs in by_cond.items()}
+    text += ['', '| newest knock on the hand before the onset [s] | trials | caught | early | '
+             "median [ms] | median of latency minus its condition set's median without a "
+             'knock [ms] | released by the slow path | median force_change_max, 50 ms before '
+             'the onset [N] |', '|---|---|---|---|---|---|---|---|']
+    bins = [(0.0, 0.3), (0.3, window_s), (window_s, 0.65), (0.65, 1.0), (1.0, 2.0),
+            (2.0, np.inf)]
+    groups = [(f'{lo:.2f}-{hi:.2f}' if np.isfinite(hi) else f'>= {lo:.2f}',
+               [r for r in rows if r['knocked'] and lo <= r['knock_gap'] < hi])
+              for lo, hi in bins]
+    groups += [('knocked, none before the onset',
+                [r for r in rows if r['knocked'] and np.isnan(r['knock_gap'])]),
+               ('every knocked trial', [r for r in rows if r['knocked']]),
+               ('no knock', [r for r in rows if not r['knocked']])]
+    for label, rs in groups:
+        caught = [r for r in rs if r['verdict'] == 'detected']
+        excess = [r['latency'] - cond_median[r['condition']] for r in caught]
+        excess_ms = '-' if not excess else f'{1000 * float(np.nanmedian(excess)):+.0f}'
         cm = [r['change_max_before'] for r in rs if not np.isnan(r['change_max_before'])]
-        text.append(f'| {label} | {len(rs)} | {len(lat)} | '
-                    f'{sum(r["verdict"] == "premature" for r in rs)} | {median_ms(lat)} | '
-                    f'{sum(r["path"] == "slow" for r in rs)} | '
+        text.append(f'| {label} | {len(rs)} | {len(caught)} | '
+                    f'{sum(r["verdict"] == "premature" for r in rs)} | '
+                    f'{median_ms([r["latency"] for r in caught])} | '
+                    f'{excess_ms} | '
+                    f'{sum(r["path"] == "slow" for r in caught)} | '
                     f'{(float(np.median(cm)) if cm else float("nan")):.2f} |')
-    not_knocked = [r for r in rows if not r['knocked']]
-    cm = [r['change_max_before'] for r in not_knocked if not np.isnan(r['change_max_before'])]
-    text.append(f'| (trials without a knock) | {len(not_knocked)} | '
-                f'{sum(r["verdict"] == "detected" for r in not_knocked)} | '
-                f'{sum(r["verdict"] == "premature" for r in not_knocked)} | '
-                f'{median_ms([r["latency"] for r in not_knocked if r["verdict"] == "detected"])}'
-                f' | {sum(r["path"] == "slow" for r in not_knocked)} | '
-                f'{(float(np.median(cm)) if cm else float("nan")):.2f} |')
     if per_trial:
         text += ['', '| trial | condition | knock before onset [s] | verdict | latency [ms] | '
                  'path | max P, first 50 ms | force_change_max before [N] |',
                  '|---|---|---|---|---|---|---|---|']
+        knocked = [r for r in rows if r['knocked']]
         for r in sorted(knocked, key=lambda r: (np.nan_to_num(r['knock_gap'], nan=99.0))):
             lat = '-' if r['latency'] is None else f'{1000 * r["latency"]:.0f}'
             text.append(f'| {r["name"]} | {r["condition"]} | {r["knock_gap"]:.2f} | '
@@ -150,18 +157,24 @@ def main() -> int:
     parser.add_argument('folders', nargs='+', type=Path)
     parser.add_argument('--model', type=Path, default=Path('models/contact_forest_ft.npz'))
     parser.add_argument('--trials', action='store_true', help='one line per knocked trial')
+    parser.add_argument('--pool', action='store_true',
+                        help='one report over the trials of every folder')
     parser.add_argument('--jobs', type=int, default=2)
     args = parser.parse_args()
     bundle = load_bundle(path=args.model)
     config = bundle.feature_config
     window_s = config.change_max_frames * config.ft_hop / config.ft_rate_hz
+    rows = {}
     for i, folder in enumerate(args.folders):
         trials = decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=str(i))
         frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
                                 wrench_rate=100.0, jobs=args.jobs)
-        print(f'## {folder} ({bundle.model_id}, rule {bundle.decision_rule.short()})\n')
-        print(report(trial_rows(bundle=bundle, frames=frames), window_s=window_s,
-                     per_trial=args.trials))
+        rows[str(folder)] = trial_rows(bundle=bundle, frames=frames)
+    if args.pool:
+        rows = {' + '.join(rows): [r for rs in rows.values() for r in rs]}
+    for name, rs in rows.items():
+        print(f'## {name} ({bundle.model_id}, rule {bundle.decision_rule.short()})\n')
+        print(report(rs, window_s=window_s, per_trial=args.trials))
         print()
     return 0
 
