@@ -125,6 +125,8 @@ def report(rows: list, *, window_s: float, per_trial: bool) -> str:
               for lo, hi in bins]
     groups += [('knocked, none before the onset',
                 [r for r in rows if r['knocked'] and np.isnan(r['knock_gap'])]),
+               ('knocked, none in the last 1.00 s before the onset',
+                [r for r in rows if r['knocked'] and not r['knock_gap'] < 1.0]),
                ('every knocked trial', [r for r in rows if r['knocked']]),
                ('no knock', [r for r in rows if not r['knocked']])]
     for label, rs in groups:
