@@ -70,14 +70,17 @@ LOFO_SETTINGS = {
     'ft-only+signed+hold': _SPECTRAL + _SHIFT + _SIGNED + _HOLD,
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
+    'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
-#: (the ``*_change_max`` / ``*_shift_max`` window shortened from 50 F/T feature frames, so
-#: that a knock on the hand 0.2-0.5 s before a touch has left it).
+#: (``+max20``, ``+max30``: the ``*_change_max`` / ``*_shift_max`` window shortened from 50 F/T
+#: feature frames, so that a knock on the hand 0.2-0.5 s before a touch has left it; ``+w32``:
+#: the F/T spectra over 32 samples instead of 64, so that they forget a knock's ringing sooner).
 LOFO_CONFIG_CHANGES = {
     'ft-only+signed+max20': {'change_max_frames': 20},
     'ft-only+signed+max30': {'change_max_frames': 30},
+    'ft-only+signed+w32': {'ft_window': 32},
 }
 
 
