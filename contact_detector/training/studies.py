@@ -26,6 +26,7 @@ from dataclasses import replace
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.evaluation.metrics import premature_text, summarize
+from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
@@ -67,6 +68,19 @@ LOFO_SETTINGS = {
     'ft-only': _SPECTRAL + _SHIFT,
     'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+hold': _SPECTRAL + _SHIFT + _SIGNED + _HOLD,
+    'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
+    'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
+    'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
+}
+#: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
+#: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
+#: (``+max20``, ``+max30``: the ``*_change_max`` / ``*_shift_max`` window shortened from 50 F/T
+#: feature frames, so that a knock on the hand 0.2-0.5 s before a touch has left it; ``+w32``:
+#: the F/T spectra over 32 samples instead of 64, so that they forget a knock's ringing sooner).
+LOFO_CONFIG_CHANGES = {
+    'ft-only+signed+max20': {'change_max_frames': 20},
+    'ft-only+signed+max30': {'change_max_frames': 30},
+    'ft-only+signed+w32': {'ft_window': 32},
 }
 
 
@@ -204,7 +218,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
 
     ``trials`` comes from :func:`~contact_detector.training.sweep.decode_bags`; ``settings``
     are names of :data:`LOFO_SETTINGS`, column subsets of one feature configuration (the
-    shipped one with every extra feature) computed once per trial. A name ending in
+    shipped one with every extra feature, with the fields of :data:`LOFO_CONFIG_CHANGES`
+    changed for the settings there) computed once per trial and configuration. The trials with
+    a knock on the hand in the air (:func:`~contact_detector.evaluation.truth.knocked_in_air`)
+    are also scored together, each while its family is left out. A name ending in
     :data:`~contact_detector.training.augmentation.AUGMENTED` (``shipped+aug``) trains the
     forests on the same trials with their wrenches varied by ``augmentation`` (drawn from
     ``seed`` and each trial's name); the left-out family is never augmented. With ``seeds``,
@@ -214,36 +231,49 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     ``min_samples_leaf`` (1: fully grown, the paper's). Returns markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
-    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
-    frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=audio_rate,
-                                 wrench_rate=wrench_rate, jobs=jobs).values())
-    fit_frames = None
-    if any(name.endswith(AUGMENTED) for name in settings):
-        fit_frames = list(compute_frames(
-            events_by_trial=trials, config=config, audio_rate=audio_rate,
-            wrench_rate=wrench_rate, jobs=jobs, augmentation=augmentation,
-            seed=seed).values())
+    full = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
+    cache: Dict[tuple, list] = {}
+
+    def frames_of(config: FeatureConfig, augmented: bool) -> list:
+        if (config, augmented) not in cache:
+            cache[config, augmented] = list(compute_frames(
+                events_by_trial=trials, config=config, audio_rate=audio_rate,
+                wrench_rate=wrench_rate, jobs=jobs,
+                augmentation=augmentation if augmented else None, seed=seed).values())
+        return cache[config, augmented]
+
     rules = lofo_rules()
     worst_lines = ['| setting | rule | worst family | detected | premature (after) | '
-                   'median [ms] | p95 [ms] | all families: detected / premature |',
-                   '|---|---|---|---|---|---|---|---|']
+                   'median [ms] | p95 [ms] | all families: detected / premature | '
+                   'knocked on the hand, all families: detected / premature / median [ms] |',
+                   '|---|---|---|---|---|---|---|---|---|']
     family_lines = ['| setting | rule | family | detected | premature (after) | '
                     'impact events | median [ms] | p95 [ms] |',
                     '|---|---|---|---|---|---|---|---|']
     for name in progress(settings):
         augmented = name.endswith(AUGMENTED)
-        columns = (LOFO_SETTINGS[name.removesuffix(AUGMENTED)]
-                   or DEFAULT_FEATURES.feature_names)
+        base = name.removesuffix(AUGMENTED)
+        columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
+        config = replace(full, **LOFO_CONFIG_CHANGES.get(base, {}))
         setting = FeatureSetting(name, config, LabelWindow(label_start_s, label_end_s),
                                  columns=tuple(columns))
+        frames = frames_of(config, False)
+        knocked = {}
+        for f in frames:
+            knocked.setdefault(f.truth.condition, []).append(knocked_in_air(f.truth))
         pooled: Dict[tuple, list] = {}
+        pooled_knocked: Dict[int, list] = {}
         for forest_seed in (seeds or (seed,)):
             for fold in leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                              n_estimators=trees, seed=forest_seed, jobs=jobs,
-                                             fit_frames=fit_frames if augmented else None,
+                                             fit_frames=(frames_of(config, True) if augmented
+                                                         else None),
                                              min_samples_leaf=min_samples_leaf):
                 for k, row in enumerate(fold.rows):
                     pooled.setdefault((k, fold.family), []).extend(row.outcomes)
+                    # the fold's test trials are its family's frames, in order
+                    pooled_knocked.setdefault(k, []).extend(
+                        o for o, hit in zip(row.outcomes, knocked[fold.family]) if hit)
         families = sorted({family for _, family in pooled})
         for k, rule in enumerate(rules):
             summaries = []
@@ -260,10 +290,13 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
             total = sum(s['detected'] for s in summaries)
             trials_n = sum(s['trials'] for s in summaries)
             early = sum(s['premature'] for s in summaries)
+            kn = summarize(pooled_knocked.get(k, []))
             worst_lines.append(f"| {name} | {rule.short()} | {w['family']} | "
                                f"{w['detected']}/{w['trials']} | {premature_text(w)} | "
                                f"{_ms(w['latency_ms_median'])} | {_ms(w['latency_ms_p95'])} | "
-                               f'{total}/{trials_n} / {early} |')
+                               f'{total}/{trials_n} / {early} | '
+                               f"{kn['detected']}/{kn['trials']} / {kn['premature']} / "
+                               f"{_ms(kn['latency_ms_median'])} |")
     forests = (f'Forests: {trees} trees, min_samples_leaf {min_samples_leaf}, '
                f"seeds {', '.join(str(k) for k in (seeds or (seed,)))} (each family's row pools "
                'them).')

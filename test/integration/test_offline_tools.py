@@ -632,6 +632,27 @@ def test_sweep_lofo_scores_each_family_plain_and_augmented(data, tmp_path):
     assert all(r[2] in families for r in rows(worst_part))
 
 
+def test_sweep_lofo_scores_the_knocked_trials_and_a_shorter_maximum_window(data, tmp_path):
+    out = tmp_path / 'lofo.md'
+    assert sweep_cli.main([str(data['bags']), '--lofo', '--lofo-settings',
+                           'ft-only+signed,ft-only+signed+max20', '--trees', '2', '--jobs',
+                           '1', '--out', str(out)]) == 0
+    manifest = json.loads((data['bags'] / 'manifest.json').read_text())
+    knocked = sum(any(i['kind'] == 'hand' and i['in_air'] for i in t['impacts'])
+                  for t in manifest['trials'])
+    assert knocked > 0
+    rows = [[c.strip() for c in line.strip('|').split('|')]
+            for line in out.read_text().split('## Every family')[0].splitlines()
+            if line.startswith('| ft-only')]
+    assert {r[0] for r in rows} == {'ft-only+signed', 'ft-only+signed+max20'}
+    for r in rows:
+        # the last column: the knocked trials of every family, each scored while left out
+        detected, early, _ = (v.strip() for v in r[8].split(' / '))
+        caught, trials = (int(v) for v in detected.split('/'))
+        assert trials == knocked and caught + int(early) <= knocked
+    assert studies.LOFO_CONFIG_CHANGES['ft-only+signed+max20'] == {'change_max_frames': 20}
+
+
 def test_sweep_lofo_pools_each_family_over_the_forest_seeds(data, tmp_path):
     bags = str(data['bags'])
     tables = {}
