@@ -26,7 +26,7 @@ from dataclasses import replace
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.evaluation.metrics import premature_text, summarize
-from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
@@ -67,6 +67,8 @@ LOFO_SETTINGS = {
     'ft-only': _SPECTRAL + _SHIFT,
     'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+hold': _SPECTRAL + _SHIFT + _SIGNED + _HOLD,
+    # the shipped columns and the load change against the load carried at the start
+    'shipped+carried': DEFAULT_FEATURES.feature_names + CARRIED_FEATURES,
 }
 
 
