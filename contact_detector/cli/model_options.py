@@ -52,10 +52,19 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                                       '*_shift baseline'),
                         ('shift_window', 'F/T samples in the median baseline of *_shift'),
                         ('hold_frames', 'F/T feature frames over which the *_hold features '
-                                        'see whether a change held')):
+                                        'see whether a change held'),
+                        ('carried_window', 'F/T samples after a start or an arming whose '
+                                           'median is the carried load of *_shift_rel and '
+                                           '*_carried_cos')):
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
+    for field, unit in (('carried_floor_force', 'N'), ('carried_floor_torque', 'N m')):
+        default = getattr(d, field)
+        parser.add_argument('--' + field.replace('_', '-'), type=float, default=default,
+                            help=f'smallest carried load in {unit} that *_shift_rel divides '
+                                 f'by and *_carried_cos takes a direction from (default '
+                                 f'{default})')
     parser.add_argument('--extra-features', default=None,
                         help='comma-separated extra features, from '
                              f"{', '.join(EXTRA_FEATURES)} (default "
@@ -123,6 +132,9 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          change_max_frames=args.change_max_frames,
                          shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
                          shift_window=args.shift_window, hold_frames=args.hold_frames,
+                         carried_window=args.carried_window,
+                         carried_floor_force=args.carried_floor_force,
+                         carried_floor_torque=args.carried_floor_torque,
                          extra_features=extra)
 
 

@@ -266,8 +266,21 @@ class ContactDetector:
         self.latest_wrench_t: Optional[float] = None
 
     def arm(self, armed: bool) -> None:
-        """Arm or disarm the release."""
+        """
+        Arm or disarm the release; arming measures the carried load again.
+
+        The carried-load features (``*_shift_rel``, ``*_carried_cos``) compare the load change
+        with the load the hand carries when the release is armed, before the approach: the
+        median of the next ``carried_window`` F/T samples (the previous measurement holds
+        until then).
+        """
         self.logic.arm(armed)
+        if armed:
+            self.measure_carried()
+
+    def measure_carried(self) -> None:
+        """Measure the carried load again over the next ``carried_window`` F/T samples."""
+        self.extractor.ft.measure_carried()
 
     @property
     def armed(self) -> bool:

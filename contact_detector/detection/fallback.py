@@ -125,8 +125,15 @@ class AudioFallback:
         return out
 
     def arm(self, armed: bool) -> None:
-        """Arm or disarm the release (of the active model; the other stays disarmed)."""
+        """
+        Arm or disarm the release (of the active model; the other stays disarmed).
+
+        Arming measures the carried load again in both (either may be active at the contact).
+        """
         self.active.arm(armed)
+        if armed:
+            self.primary.measure_carried()
+            self.fallback.measure_carried()
 
     def reset(self) -> None:
         """Forget all stream state of both detectors; back to the multimodal model."""

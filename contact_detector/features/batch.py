@@ -25,8 +25,9 @@ import math
 from typing import Optional
 
 from contact_detector.features import spectral
-from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              HOLD_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.config import (AUDIO_FEATURES, CARRIED_FEATURES,
+                                              DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
+                                              SHIFT_FEATURES)
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
@@ -130,8 +131,13 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     n = config.ft_window
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
-    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)):
+    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(CARRIED_FEATURES)):
         need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
+    if set(deltas) & set(CARRIED_FEATURES):
+        need = max(need, config.carried_window)
+    # the carried load: the per-axis median of the first carried_window samples
+    carried = np.median(dec[:config.carried_window], axis=0) if n_blocks else np.zeros(6)
+    floors = (config.carried_floor_force, config.carried_floor_torque)
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
     rows, times, changes, shifts = [], [], [], []
     previous = [None, None]
@@ -172,6 +178,12 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                      for axes in ((0, 1, 2), (3, 4, 5))]
             shifts.append(shift)
             derived['force_shift'], derived['torque_shift'] = shift
+            for k, (axes, side) in enumerate((((0, 1, 2), 'force'), ((3, 4, 5), 'torque'))):
+                size = math.sqrt(sum(carried[a] ** 2 for a in axes))
+                derived[f'{side}_shift_rel'] = shift[k] / max(size, floors[k])
+                dot = sum((new_v[a] - base_v[a]) * carried[a] for a in axes)
+                cos = dot / (shift[k] * size) if size >= floors[k] and shift[k] > 0 else 0.0
+                derived[f'{side}_carried_cos'] = min(1.0, max(-1.0, cos))
             for name, frames in (('min', config.shift_min_frames),
                                  ('max', config.change_max_frames)):
                 recent = shifts[-frames:]

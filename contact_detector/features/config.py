@@ -72,6 +72,12 @@ PAPER_FEATURES = (
 #: newest ``hold_frames`` F/T feature frames: their smallest ``*_change`` if all are > 0, their
 #: largest if all are < 0, else 0 (N, N m); ``*_shift_hold`` the smallest ``*_shift`` over the
 #: same frames. A knock's pulse falls back within a few frames, a step of the load does not.
+#: ``*_shift_rel`` is ``*_shift`` divided by the length of the *carried* load, the per-axis
+#: median of the first ``carried_window`` F/T samples after a start or an arming (floored at
+#: ``carried_floor_force`` N / ``carried_floor_torque`` N m, so a tared sensor gives the plain
+#: shift in those units); ``*_carried_cos`` is the cosine between the vector change and the
+#: carried load (-1: the change takes the carried load off, as a table does on an untared
+#: sensor; 0 for a change across it, and 0 when the carried load is below the floor).
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -95,6 +101,10 @@ EXTRA_FEATURES = (
     'torque_change_hold',
     'force_shift_hold',
     'torque_shift_hold',
+    'force_shift_rel',
+    'torque_shift_rel',
+    'force_carried_cos',
+    'torque_carried_cos',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -106,7 +116,9 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
                   'torque_change', 'ft_change_angle', 'force_change_max', 'torque_change_max',
                   'force_shift', 'torque_shift', 'force_shift_min', 'torque_shift_min',
                   'force_shift_max', 'torque_shift_max', 'force_change_hold',
-                  'torque_change_hold', 'force_shift_hold', 'torque_shift_hold')
+                  'torque_change_hold', 'force_shift_hold', 'torque_shift_hold',
+                  'force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
+                  'torque_carried_cos')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -121,6 +133,21 @@ SHIFT_FEATURES = ('force_shift', 'torque_shift', 'force_shift_min', 'torque_shif
 #: need both the ``*_change`` and the ``*_shift`` values).
 HOLD_FEATURES = ('force_change_hold', 'torque_change_hold', 'force_shift_hold',
                  'torque_shift_hold')
+
+#: The features that compare the vector change with the load carried after a start or an
+#: arming (they need the ``*_shift`` vector change and the carried load).
+CARRIED_FEATURES = ('force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
+                    'torque_carried_cos')
+
+#: :attr:`FeatureConfig.carried_window`, ``carried_floor_force`` and ``carried_floor_torque``
+#: when not given: left out of :meth:`FeatureConfig.to_dict` like ``hold_frames``. 50 samples
+#: are the detector's 0.5 s warm-up at 100 Hz. The floors (0.5 N, 0.05 N m) are 2.5 and 3 times
+#: the largest per-sample noise the simulator gives a sensor (0.2 N, 0.015 N m; a median of 50
+#: samples of a tared sensor stays far below them) and under the weight of the lightest object
+#: it carries (0.1 kg, ~1 N; its torque at 5 cm, ~0.05 N m): below them the carried load is
+#: noise, not a load whose direction means something.
+DEFAULT_CARRIED = {'carried_window': 50, 'carried_floor_force': 0.5,
+                   'carried_floor_torque': 0.05}
 
 #: :attr:`FeatureConfig.hold_frames` when not given: left out of :meth:`FeatureConfig.to_dict`
 #: so configurations written before the field existed, and their model hashes, stay the same.
@@ -188,6 +215,15 @@ class FeatureConfig:
         F/T feature frames over which ``*_change_hold`` and ``*_shift_hold`` see whether a
         change held (default 4, 40 ms at 100 Hz; written by :meth:`to_dict` only when it
         differs).
+    carried_window : int
+        F/T samples (at ``ft_rate_hz``) after a start, a reset or an arming whose per-axis
+        median is the carried load of ``*_shift_rel`` and ``*_carried_cos`` (default 50,
+        0.5 s at 100 Hz: the warm-up).
+    carried_floor_force, carried_floor_torque : float
+        Smallest carried |F| in N and |T| in N m that counts as a load: ``*_shift_rel``
+        divides by ``max(|carried|, floor)`` and ``*_carried_cos`` is 0 below it (defaults 0.5
+        and 0.05; :data:`DEFAULT_CARRIED` says why). These three are written by
+        :meth:`to_dict` only when they differ from their defaults.
 
     Notes
     -----
@@ -221,11 +257,15 @@ class FeatureConfig:
     shift_window: int = 40
     audio: bool = True
     hold_frames: int = DEFAULT_HOLD_FRAMES
+    carried_window: int = DEFAULT_CARRIED['carried_window']
+    carried_floor_force: float = DEFAULT_CARRIED['carried_floor_force']
+    carried_floor_torque: float = DEFAULT_CARRIED['carried_floor_torque']
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
         object.__setattr__(self, 'extra_features', tuple(self.extra_features))
-        positive = ('audio_frame_s', 'audio_hop_s', 'ft_rate_hz', 'noise_floor_tau_s')
+        positive = ('audio_frame_s', 'audio_hop_s', 'ft_rate_hz', 'noise_floor_tau_s',
+                    'carried_floor_force', 'carried_floor_torque')
         for name in positive:
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
@@ -235,7 +275,7 @@ class FeatureConfig:
                           ('delta_lag', 1), ('baseline_window', 1), ('peak_frames', 1),
                           ('rise_frames', 1), ('change_max_frames', 1),
                           ('shift_min_frames', 1), ('shift_lag', 1), ('shift_window', 1),
-                          ('hold_frames', 1)):
+                          ('hold_frames', 1), ('carried_window', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')
@@ -325,6 +365,9 @@ class FeatureConfig:
             del data['audio']
         if self.hold_frames == DEFAULT_HOLD_FRAMES:
             del data['hold_frames']
+        for name, default in DEFAULT_CARRIED.items():
+            if data[name] == default:
+                del data[name]
         return data
 
     @classmethod

@@ -16,9 +16,10 @@
 Load-change features of |F| and |T|: window means and medians, vector shifts, change angles.
 
 ``*_delta = window_mean(ends) - window_mean(ends - delta_lag)``, ``*_change = window_mean(ends)
-- window_median(ends - delta_lag)``, ``*_shift = |mean(F) - median(F)|`` over the vectors and
-``ft_*_angle = atan2(dT, dF)``; :class:`~contact_detector.features.force_torque.ForceTorqueStream`
-evaluates them on its window (see docs/features.md).
+- window_median(ends - delta_lag)``, ``*_shift = |mean(F) - median(F)|`` over the vectors (and
+against the carried load, :func:`relative_to_carried`) and ``ft_*_angle = atan2(dT, dF)``;
+:class:`~contact_detector.features.force_torque.ForceTorqueStream` evaluates them on its window
+(see docs/features.md).
 """
 
 from contact_detector.features.buffers import column_windows
@@ -114,6 +115,52 @@ def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
     change = recent - baseline
     return np.stack([np.linalg.norm(change[:, :3], axis=1),
                      np.linalg.norm(change[:, 3:], axis=1)], axis=1)
+
+
+def relative_to_carried(*, change: np.ndarray, shift: np.ndarray, carried: np.ndarray,
+                        floor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Compare the change of the force and torque vectors with the load carried before it.
+
+    ``force_shift_rel = |dF| / max(|C_F|, floor_F)`` and ``force_carried_cos = dF . C_F /
+    (|dF| |C_F|)``, 0 when ``|C_F| < floor_F`` or ``|dF| = 0``; likewise for the torque. ``dF``
+    is the change of :func:`vector_shift` (``recent - baseline``) and ``C`` the carried load
+    (the per-axis median of the first samples after a start or an arming). Dot products and
+    lengths do not change when the sensor frame rotates; a change that takes the carried load
+    off (the table, on an untared sensor) has a cosine near -1, a push across the load near 0.
+    On a tared sensor the carried load is near 0: the floor keeps the ratio finite (it is
+    then the shift in units of the floor) and the cosine says nothing (0).
+
+    Parameters
+    ----------
+    change : np.ndarray, shape (m, 6)
+        ``recent - baseline`` of :func:`vector_shift`: force x, y, z in N, torque in N m.
+    shift : np.ndarray, shape (m, 2)
+        Its lengths, :func:`vector_shift`'s output.
+    carried : np.ndarray, shape (m, 6)
+        The carried force (N) and torque (N m) of each frame.
+    floor : np.ndarray, shape (2,)
+        The smallest carried |F| (N) and |T| (N m) that counts as a load, > 0.
+
+    Returns
+    -------
+    rel : np.ndarray, shape (m, 2)
+        ``force_shift_rel``, ``torque_shift_rel``: dimensionless, >= 0.
+    cos : np.ndarray, shape (m, 2)
+        ``force_carried_cos``, ``torque_carried_cos`` in [-1, 1].
+
+    """
+    size = np.stack([np.linalg.norm(carried[:, :3], axis=1),
+                     np.linalg.norm(carried[:, 3:], axis=1)], axis=1)
+    rel = shift / np.maximum(size, floor)
+    # written out, not @: BLAS sums one row and many rows in different orders, and a frame's
+    # value must not depend on how many frames one call computes
+    product = change * carried
+    dot = np.stack([product[:, 0] + product[:, 1] + product[:, 2],
+                    product[:, 3] + product[:, 4] + product[:, 5]], axis=1)
+    scale = shift * np.where(size >= floor, size, 0.0)
+    cos = np.divide(dot, scale, out=np.zeros_like(dot), where=scale > 0)
+    return rel, np.clip(cos, -1.0, 1.0)
 
 
 def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:

@@ -27,10 +27,11 @@ from typing import Optional, Sequence
 from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
-from contact_detector.features.config import (CHANGE_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              HOLD_FEATURES, PAPER_FEATURES, SHIFT_FEATURES)
-from contact_detector.features.deltas import (vector_shift, window_mean, window_median,
-                                              with_angle)
+from contact_detector.features.config import (CARRIED_FEATURES, CHANGE_FEATURES,
+                                              DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
+                                              PAPER_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.deltas import (relative_to_carried, vector_shift, window_mean,
+                                              window_median, with_angle)
 from contact_detector.features.frames import TimeJumpError
 from contact_detector.features.resample import WrenchResampler
 import numpy as np
@@ -77,9 +78,15 @@ class ForceTorqueStream:
         n = config.ft_window
         need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
                 if self.use_delta else n)
-        # the *_hold features hold both the changes and the shifts
-        if set(self.use_delta) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)):
+        # the *_hold features hold both the changes and the shifts; the carried-load features
+        # compare the vector change with the load measured over the first carried_window
+        # samples, which every frame after a start must have
+        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(CARRIED_FEATURES)
+        if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
+        self._want_carried = bool(set(self.use_delta) & set(CARRIED_FEATURES))
+        if self._want_carried:
+            need = max(need, config.carried_window)
         self.first_end = need - 1
         self.history = need
         self.columns = FT_SPECTRAL_COLUMNS + tuple(self.use_delta)
@@ -89,7 +96,7 @@ class ForceTorqueStream:
         self._want_change_max = bool(wanted & {'force_change_max', 'torque_change_max'})
         # (force_change, torque_change) of the frames before the newest, for *_change_max.
         self._recent_changes = TailBuffer(capacity=config.change_max_frames, width=2)
-        self._want_shift = bool(wanted & (set(SHIFT_FEATURES) | set(HOLD_FEATURES)))
+        self._want_shift = bool(wanted & vector)
         # (force_shift, torque_shift) of the frames before the newest, for *_shift_min/max.
         self._recent_shifts = TailBuffer(
             capacity=max(config.change_max_frames, config.shift_min_frames), width=2)
@@ -102,13 +109,32 @@ class ForceTorqueStream:
         self._mags = TailBuffer(capacity=need + 64, width=2)    # |F|, |T| of the newest samples
         self._mag_ts = TailBuffer(capacity=need + 64)            # their times
         self._vecs = TailBuffer(capacity=need + 64, width=6)     # F, T vectors (shift features)
+        # the carried load: the per-axis median of the first carried_window samples after a
+        # reset or measure_carried(); kept across the window restarts of a wrench gap
+        self._carried_rows = TailBuffer(capacity=config.carried_window, width=6)
+        self._floor = np.array([config.carried_floor_force, config.carried_floor_torque])
         self.restarts = 0
         self.reset()
 
     def reset(self) -> None:
-        """Forget everything, including the last stamp seen."""
+        """Forget everything, including the last stamp seen and the carried load."""
         self.last_input_t: Optional[float] = None
+        self.carried: Optional[np.ndarray] = None
+        self.measure_carried()
         self._restart()
+
+    def measure_carried(self) -> None:
+        """
+        Measure the carried load again over the next ``carried_window`` F/T samples.
+
+        Called by a reset (a start, ``~/reset``, a time jump) and by each arming: the hand
+        now carries what it will carry into the approach. Until the new measurement is
+        complete the frames keep the previous carried load (after a reset there is none, but
+        no frame comes before ``carried_window`` samples). A wrench gap restarts the DFT
+        window, not this: the object in the hand has not changed.
+        """
+        self._carried_rows.clear()
+        self._measuring = self._want_carried
 
     def _restart(self) -> None:
         # Forget the window, previous spectra and partial block; keep the last stamp.
@@ -122,6 +148,9 @@ class ForceTorqueStream:
         self._vecs.clear()
         self._recent_shifts.clear()
         self._recent_holds.clear()
+        # a measurement that completes from now on applies from its sample on
+        self._previous_carried: Optional[np.ndarray] = None
+        self._carried_from = 0
 
     def check_stamps(self, t: np.ndarray) -> None:
         """Raise InputError/TimeJumpError unless ``t`` is strictly increasing and new."""
@@ -244,11 +273,37 @@ class ForceTorqueStream:
         held[:, 2:] = low[:, 2:]
         return held
 
+    def _measure(self, dec_v: np.ndarray) -> None:
+        # Feed the carried-load measurement; the decimated index from which the new carried
+        # load applies is self._carried_from (frames before it keep the previous one).
+        missing = self.config.carried_window - self._carried_rows.view.shape[0]
+        self._carried_rows.extend(dec_v[:missing])
+        if dec_v.shape[0] >= missing:
+            self._previous_carried = self.carried
+            self.carried = np.median(self._carried_rows.view, axis=0)
+            self._carried_from = self._n_dec + missing - 1
+            self._measuring = False
+
+    def _carried_per_frame(self, ends: np.ndarray) -> np.ndarray:
+        # (m, 6) carried load of each frame (decimated indices ends + self._mag_start)
+        m = ends.size
+        if self.carried is None:
+            return np.zeros((m, 6))
+        rows = np.broadcast_to(self.carried, (m, 6))
+        if self._previous_carried is None:
+            return rows
+        older = ends + self._mag_start < self._carried_from
+        if not older.any():
+            return rows
+        return np.where(older[:, None], self._previous_carried, rows)
+
     def _push_segment(self, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dec_t, dec_v = self._resampler.push(t=t, values=v)
         n_blocks = dec_t.size
         if n_blocks == 0:
             return np.zeros(0), np.zeros((0, len(self.columns)))
+        if self._measuring:
+            self._measure(dec_v)
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)
@@ -318,10 +373,16 @@ class ForceTorqueStream:
                     derived['force_change_max'], derived['torque_change_max'] = peak.T
             if self._want_shift:
                 vecs = self._vecs.view
-                shift = vector_shift(
-                    recent=window_mean(signal=vecs, ends=ends, window=cfg.delta_window),
-                    baseline=window_median(signal=vecs, ends=ends - cfg.shift_lag,
-                                           window=cfg.shift_window))
+                recent_v = window_mean(signal=vecs, ends=ends, window=cfg.delta_window)
+                base_v = window_median(signal=vecs, ends=ends - cfg.shift_lag,
+                                       window=cfg.shift_window)
+                shift = vector_shift(recent=recent_v, baseline=base_v)
+                if self._want_carried:
+                    rel, cos = relative_to_carried(change=recent_v - base_v, shift=shift,
+                                                   carried=self._carried_per_frame(ends),
+                                                   floor=self._floor)
+                    derived['force_shift_rel'], derived['torque_shift_rel'] = rel.T
+                    derived['force_carried_cos'], derived['torque_carried_cos'] = cos.T
                 low, high = self._shift_extremes(shift)
                 derived['force_shift'], derived['torque_shift'] = shift.T
                 derived['force_shift_min'], derived['torque_shift_min'] = low.T

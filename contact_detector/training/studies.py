@@ -27,7 +27,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.evaluation.metrics import premature_text, summarize
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
@@ -71,6 +71,8 @@ LOFO_SETTINGS = {
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
+    # the shipped columns and the load change against the load carried at the start
+    'shipped+carried': DEFAULT_FEATURES.feature_names + CARRIED_FEATURES,
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed

@@ -22,7 +22,7 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
 from contact_detector.features.buffers import column_windows, running_max
-from contact_detector.features.config import EXTRA_FEATURES
+from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES
 from contact_detector.features.deltas import window_median
 from contact_detector.features.force_torque import ForceTorqueStream
 from hypothesis import given, settings, strategies as st
@@ -303,6 +303,122 @@ def test_hold_features_see_that_a_load_change_stayed_and_a_knock_fell_back():
 
 # --- streaming extractor ------------------------------------------------------------------
 
+CARRIED_CONFIG = FeatureConfig(extra_features=('force_shift', 'torque_shift') + CARRIED_FEATURES,
+                               delta_window=1)
+
+
+def _carried_features(force, torque, *, config=CARRIED_CONFIG, t=None):
+    stream = ForceTorqueStream(config=config, input_rate=100.0)
+    t = T0 + np.arange(force.shape[0]) / 100 if t is None else t
+    ft, x = stream.push(t=t, force=force, torque=torque)
+    return dict(zip(np.round((ft - T0) * 100).astype(int).tolist(), x[:, -6:].tolist()))
+
+
+def _carried_load(n: int, *, lever_m: float = 0.15) -> tuple:
+    """(n, 3) force and torque of a 6 N weight along -x held at ``lever_m`` along z."""
+    force = np.zeros((n, 3))
+    force[:, 0] = -6.0
+    return force, np.cross([0.0, 0.0, lever_m], force)
+
+
+def test_carried_features_relate_the_change_to_the_carried_load_in_any_sensor_frame():
+    # the table takes 4 N of a 6 N weight under the hand (0.15 m along z): the change is 2/3 of
+    # the carried load, against it (cosine -1), for the force and its torque alike, whatever
+    # the sensor's orientation (rotations of the frame change neither lengths nor angles)
+    n = 120
+    force, torque = _carried_load(n)
+    force[80:, 0] += np.minimum(np.arange(n - 80) / 5, 1.0) * 4.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    ref = _carried_features(force, torque)
+    assert ref[79] == [0.0] * 6                          # nothing changed yet
+    assert ref[90][:2] == pytest.approx([4.0, 0.6])      # force_shift, torque_shift
+    assert ref[90][2:] == pytest.approx([4 / 6, 4 / 6, -1.0, -1.0])
+    for seed in range(4):
+        rot = _random_rotation(seed)
+        got = _carried_features(force @ rot.T, torque @ rot.T)
+        for k in ref:
+            np.testing.assert_allclose(got[k], ref[k], atol=1e-9)
+
+
+def test_carried_features_on_a_tared_sensor_fall_back_to_the_floor():
+    # the same unloading seen by a tared sensor (the carried load subtracted): nothing to
+    # compare with, so the ratio is the shift in units of the floor and the cosine is 0
+    n = 120
+    force, torque = _carried_load(n)
+    force[80:, 0] += 4.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    tared = _carried_features(force - force[0], torque - torque[0])
+    floor = (CARRIED_CONFIG.carried_floor_force, CARRIED_CONFIG.carried_floor_torque)
+    assert tared[90][:2] == pytest.approx([4.0, 0.6])
+    assert tared[90][2:] == pytest.approx([4.0 / floor[0], 0.6 / floor[1], 0.0, 0.0])
+    # a bias that leaves a load above the floor is a carried load like any other
+    assert _carried_features(force, torque)[90][4] == pytest.approx(-1.0)
+
+
+def test_carried_cosine_tells_a_lasting_unload_from_a_lateral_push():
+    # both move the force by 3 N for good: the table takes it off the carried load (-1), a
+    # person pushing the object sideways adds it across the load (0), pulling it down adds it
+    # to the load (+1); the ratio does not tell them apart
+    n = 120
+    seen = {}
+    for name, direction in (('unload', [1.0, 0, 0]), ('push', [0, 3 / 5, 4 / 5]),
+                            ('pull', [-1.0, 0, 0])):
+        force, torque = _carried_load(n)
+        force[80:] += 3.0 * np.array(direction)
+        seen[name] = _carried_features(force, torque)[100]
+    assert seen['unload'][4] == pytest.approx(-1.0)
+    assert seen['push'][4] == pytest.approx(0.0, abs=1e-12)
+    assert seen['pull'][4] == pytest.approx(1.0)
+    assert all(seen[k][2] == pytest.approx(0.5) for k in seen)
+
+
+def test_carried_load_is_measured_at_the_start_and_again_on_arming_not_after_a_gap():
+    # 6 N carried at the start, then 10 N (another object) from 1 s on, a 0.2 s wrench gap at
+    # 1.5 s, an arming at 2 s and the table taking 2 N at 2.15 s: the gap restarts the window
+    # but keeps the carried load; the arming measures it again over the next carried_window
+    # (20) samples, and the frames before that keep the old one
+    n = 300
+    force, torque = _carried_load(n)
+    force[100:, 0] = -10.0
+    force[215:, 0] = -8.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    t = T0 + np.arange(n) / 100
+    t[150:] += 0.2
+    config = replace(CARRIED_CONFIG, carried_window=20)
+    got = {}
+    for single in (False, True):
+        stream = ForceTorqueStream(config=config, input_rate=100.0)
+        stream.push(t=t[:200], force=force[:200], torque=torque[:200])
+        assert stream.restarts == 1
+        assert stream.carried[:3] == pytest.approx([-6.0, 0.0, 0.0])   # the start's
+        stream.measure_carried()
+        if single:
+            rows = [stream.push(t=t[k:k + 1], force=force[k:k + 1], torque=torque[k:k + 1])
+                    for k in range(200, n)]
+            got[single] = (np.concatenate([r[0] for r in rows]),
+                           np.concatenate([r[1] for r in rows]))
+        else:
+            got[single] = stream.push(t=t[200:], force=force[200:], torque=torque[200:])
+        assert stream.carried[:3] == pytest.approx([-10.0, 0.0, 0.0])  # the arming's
+    assert all(np.array_equal(a, b) for a, b in zip(got[True], got[False]))
+    frame = dict(zip(np.round((got[True][0] - T0) * 100 - 20).astype(int).tolist(),
+                     got[True][1][:, -6:].tolist()))
+    assert frame[214][2] == 0.0
+    assert frame[218][2] == pytest.approx(2 / 6)         # the old carried load
+    assert frame[219][2] == pytest.approx(2 / 10)        # the new one, from its 20th sample
+    assert frame[218][4] == pytest.approx(-1.0) and frame[219][4] == pytest.approx(-1.0)
+
+
+def test_carried_config_fields_are_validated_and_written_only_when_changed():
+    assert 'carried_window' not in FeatureConfig().to_dict()
+    changed = replace(FeatureConfig(), carried_window=30, carried_floor_force=1.0)
+    assert FeatureConfig.from_dict(changed.to_dict()) == changed
+    for bad in ({'carried_window': 0}, {'carried_floor_force': 0.0},
+                {'carried_floor_torque': float('nan')}):
+        with pytest.raises(ConfigError, match=next(iter(bad))):
+            FeatureConfig(**bad)
+
+
 def make_signals(*, seed, seconds, audio_rate, ft_rate, ft_offset=0.00123):
     rng = np.random.default_rng(seed)
     audio = (rng.normal(0, 0.05, int(seconds * audio_rate)) * 32767).astype(np.int16)
@@ -358,6 +474,7 @@ configs = st.builds(
         ('audio_rise_db',), ('audio_peak_gap_db', 'audio_rise_db', 'force_change'),
         ('torque_change_max',), ('force_change_max', 'force_delta', 'torque_change'),
         ('force_shift', 'torque_shift_min'), ('torque_shift', 'force_shift_max', 'force_delta'),
+        ('force_carried_cos', 'torque_shift_rel'), ('force_shift_rel', 'torque_carried_cos'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
@@ -366,6 +483,7 @@ configs = st.builds(
     shift_lag=st.sampled_from([1, 5, 20]),
     shift_window=st.sampled_from([1, 4, 40]),
     hold_frames=st.sampled_from([1, 2, 4, 7]),
+    carried_window=st.sampled_from([1, 7, 50]),
 )
 
 
