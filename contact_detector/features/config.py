@@ -320,7 +320,9 @@ class FeatureConfig:
         at every sample with its mean removed; audio loudness relative to the room (dB above
         the noise floor, its recent peak, rise and gap); the change of |F| and |T| against a
         median baseline and its recent maximum; the orientation- and tare-free length of the
-        force and torque vector change with its 0.1 s minimum and 0.5 s maximum. The shipped
+        force and torque vector change with its 0.1 s minimum and 0.5 s maximum; that change
+        against the load carried at the start or arming (its size as a fraction of that load,
+        and the cosine between the two). The shipped
         model's card holds the same configuration (a test checks it).
         """
         return cls(ft_window=64, ft_hop=1, ft_detrend='mean', delta_window=1, delta_lag=5,
@@ -330,7 +332,9 @@ class FeatureConfig:
                                    'audio_peak_gap_db', 'force_change', 'torque_change',
                                    'force_change_max', 'torque_change_max', 'force_shift',
                                    'torque_shift', 'force_shift_min', 'torque_shift_min',
-                                   'force_shift_max', 'torque_shift_max'))
+                                   'force_shift_max', 'torque_shift_max', 'force_shift_rel',
+                                   'torque_shift_rel', 'force_carried_cos',
+                                   'torque_carried_cos'))
 
     @property
     def feature_names(self) -> tuple:

@@ -27,7 +27,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.evaluation.metrics import premature_text, summarize
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
@@ -59,6 +59,8 @@ _HOLD = ('force_change_hold', 'torque_change_hold', 'force_shift_hold', 'torque_
 #: The feature settings --lofo compares: name -> columns (None: the shipped model's).
 LOFO_SETTINGS = {
     'shipped': None,
+    # the model shipped before the carried-load features (2026-11-24), in its column order
+    'previous': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + _SIGNED + _SHIFT,
     'angles': ('audio_power',) + _SPECTRAL + RELATIVE_AUDIO + (
         'force_delta', 'torque_delta', 'ft_delta_angle', 'force_change', 'torque_change',
         'ft_change_angle', 'force_change_max', 'torque_change_max'),
@@ -71,8 +73,6 @@ LOFO_SETTINGS = {
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
-    # the shipped columns and the load change against the load carried at the start
-    'shipped+carried': DEFAULT_FEATURES.feature_names + CARRIED_FEATURES,
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
