@@ -23,17 +23,15 @@ measures the carried load again (another object in the hand).
 
 from dataclasses import replace
 
+from bundle_support import toy_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback
 from contact_detector.detection.offline import run_detector
-from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
-                                              FeatureConfig, SHIFT_FEATURES)
+from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, SHIFT_FEATURES
 from contact_detector.io.sensor_stream import WrenchEvent
-from contact_detector.model.bundle import ModelBundle, runtime_versions
-from contact_detector.model.rule import DecisionRule
+from contact_detector.model.bundle import ModelBundle
 import numpy as np
 import pytest
-from sklearn.ensemble import RandomForestClassifier
 
 CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
                        extra_features=SHIFT_FEATURES + CARRIED_FEATURES)
@@ -55,14 +53,7 @@ def _bundle(config: FeatureConfig) -> ModelBundle:
     x[:, lasting] = rng.uniform(0, 3, size=4000)
     x[:, cos] = rng.uniform(-1, 1, size=4000)
     y = ((x[:, lasting] > 1.0) & (x[:, cos] < -0.5)).astype(int)
-    forest = RandomForestClassifier(n_estimators=5, random_state=0).fit(x, y)
-    return ModelBundle(forest=forest, feature_config=config, feature_names=config.feature_names,
-                       feature_schema_version=FEATURE_SCHEMA_VERSION,
-                       label_window={'start_s': 0.0, 'end_s': 0.3},
-                       decision_rule=DecisionRule(threshold=0.6, confirm_frames=2,
-                                                  refractory_s=0.5),
-                       versions=runtime_versions(), training={}, metrics={},
-                       created='2026-11-24T00:00:00+00:00')
+    return toy_bundle(config=config, x=x, y=y, created='2026-11-24T00:00:00+00:00')
 
 
 def _events(direction, *, weight_n: float = 5.0, seed: int = 1) -> list:

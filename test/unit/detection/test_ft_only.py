@@ -21,20 +21,18 @@ gap restarts and time jumps are those of the multimodal path; audio is ignored, 
 
 from typing import Optional
 
+from bundle_support import toy_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector, run_features
 from contact_detector.errors import ConfigError
 from contact_detector.features.batch import batch_features
-from contact_detector.features.config import (FEATURE_SCHEMA_VERSION, FeatureConfig,
-                                              PAPER_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.config import FeatureConfig, PAPER_FEATURES, SHIFT_FEATURES
 from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, WrenchEvent
-from contact_detector.model.bundle import ModelBundle, runtime_versions
-from contact_detector.model.rule import DecisionRule
+from contact_detector.model.bundle import ModelBundle
 import numpy as np
 import pytest
-from sklearn.ensemble import RandomForestClassifier
 
 CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
                        extra_features=SHIFT_FEATURES)
@@ -53,14 +51,7 @@ def _bundle() -> ModelBundle:
     col = CONFIG.feature_names.index('force_shift_min')
     x[:, col] = rng.uniform(0, 3, size=3000)
     y = (x[:, col] > 1.0).astype(int)
-    forest = RandomForestClassifier(n_estimators=5, random_state=0).fit(x, y)
-    return ModelBundle(forest=forest, feature_config=CONFIG, feature_names=CONFIG.feature_names,
-                       feature_schema_version=FEATURE_SCHEMA_VERSION,
-                       label_window={'start_s': 0.0, 'end_s': 0.3},
-                       decision_rule=DecisionRule(threshold=0.6, confirm_frames=2,
-                                                  refractory_s=0.5),
-                       versions=runtime_versions(), training={}, metrics={},
-                       created='2026-11-23T00:00:00+00:00')
+    return toy_bundle(config=CONFIG, x=x, y=y, created='2026-11-23T00:00:00+00:00')
 
 
 @pytest.fixture(scope='module')

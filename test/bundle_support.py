@@ -1,0 +1,38 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""A toy model for detector tests: a small forest fitted on a rule over named feature columns."""
+
+from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig
+from contact_detector.model.bundle import ModelBundle, runtime_versions
+from contact_detector.model.rule import DecisionRule
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
+
+
+def toy_bundle(*, config: FeatureConfig, x: np.ndarray, y: np.ndarray,
+               created: str) -> ModelBundle:
+    """
+    Fit 5 trees on ``x`` (n, config.n_features) and labels ``y`` (n,); release at p >= 0.6 x2.
+
+    The tests choose ``x`` and ``y`` so that the forest encodes a known rule (for example
+    "contact when force_shift_min > 1 N"), so what the detector does follows from the features.
+    """
+    forest = RandomForestClassifier(n_estimators=5, random_state=0).fit(x, y)
+    return ModelBundle(forest=forest, feature_config=config, feature_names=config.feature_names,
+                       feature_schema_version=FEATURE_SCHEMA_VERSION,
+                       label_window={'start_s': 0.0, 'end_s': 0.3},
+                       decision_rule=DecisionRule(threshold=0.6, confirm_frames=2,
+                                                  refractory_s=0.5),
+                       versions=runtime_versions(), training={}, metrics={}, created=created)
