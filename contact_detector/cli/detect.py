@@ -101,6 +101,9 @@ def _detect(args: argparse.Namespace) -> int:
             out.write('\n'.join(lines) + ('\n' if lines else ''))
             frames += len(run.t)
             releases += len(run.releases)
+            if run.carried is not None and not run.carried.steady:
+                print(f'{name}: {run.carried.describe()}: the recording should start with '
+                      'the object held still in the hand', file=sys.stderr)
             if run.counts.get('audio_dropped') or run.counts.get('wrench_dropped'):
                 print(f'{name}: dropped {run.counts["audio_dropped"]} audio and '
                       f'{run.counts["wrench_dropped"]} wrench messages', file=sys.stderr)

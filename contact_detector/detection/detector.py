@@ -29,6 +29,7 @@ from typing import Optional, Sequence, Union
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
+from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
@@ -281,6 +282,17 @@ class ContactDetector:
     def measure_carried(self) -> None:
         """Measure the carried load again over the next ``carried_window`` F/T samples."""
         self.extractor.ft.measure_carried()
+
+    @property
+    def carried_load(self) -> Optional[CarriedLoad]:
+        """
+        The last completed carried-load measurement, or None.
+
+        None before the first ``carried_window`` F/T samples after a start, a reset or an
+        arming, and always when the model has no carried-load feature. A new object per
+        measurement: compare identities to notice a new one.
+        """
+        return self.extractor.ft.carried_load
 
     @property
     def armed(self) -> bool:

@@ -35,6 +35,7 @@ from typing import Optional, Sequence
 
 from contact_detector.detection.detector import ContactDetector, Decisions
 from contact_detector.errors import ConfigError
+from contact_detector.features.carried import CarriedLoad
 import numpy as np
 
 #: Names of the two models in :attr:`AudioFallback.active_name` and the switch messages.
@@ -108,6 +109,12 @@ class AudioFallback:
     def armed(self) -> bool:
         """Whether the next contact event releases."""
         return self.active.armed
+
+    @property
+    def carried_load(self) -> Optional[CarriedLoad]:
+        """The multimodal model's carried-load measurement, else the F/T-only model's."""
+        primary = self.primary.carried_load
+        return primary if primary is not None else self.fallback.carried_load
 
     @property
     def last_error(self) -> Optional[str]:

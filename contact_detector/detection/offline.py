@@ -21,9 +21,10 @@ log-time order, audio stamped as the node stamps it.
 """
 
 from dataclasses import dataclass, field
-from typing import Iterable, List
+from typing import Iterable, List, Optional
 
 from contact_detector.detection.detector import ContactDetector, Decisions
+from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import AudioEvent, BadEvent, Event, WrenchEvent
@@ -45,6 +46,9 @@ class Run:
         Contact event times (armed or not), seconds.
     counts : dict
         The detector's counters at the end.
+    carried : CarriedLoad or None
+        The detector's last carried-load measurement (None if its model has no carried-load
+        feature or the recording is shorter than the measurement).
 
     """
 
@@ -55,6 +59,7 @@ class Run:
     releases: List[float] = field(default_factory=list)
     events: List[float] = field(default_factory=list)
     counts: dict = field(default_factory=dict)
+    carried: Optional[CarriedLoad] = None
 
 
 def run_detector(events: Iterable[Event], *, detector: ContactDetector,
@@ -86,7 +91,7 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
         if decided is not None:
             return Run(t=decided.t, p=decided.p, contact=decided.contact, valid=decided.valid,
                        releases=decided.releases, events=decided.events,
-                       counts=dict(detector.counts))
+                       counts=dict(detector.counts), carried=detector.carried_load)
     blocks: List[Decisions] = []
     for event in events:
         if isinstance(event, AudioEvent):
@@ -101,12 +106,13 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
     if not blocks:
         z = np.zeros(0)
         return Run(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool),
-                   counts=dict(detector.counts))
+                   counts=dict(detector.counts), carried=detector.carried_load)
     return Run(t=np.concatenate([b.t for b in blocks]), p=np.concatenate([b.p for b in blocks]),
                contact=np.concatenate([b.contact for b in blocks]),
                valid=np.concatenate([b.valid for b in blocks]),
                releases=[r for b in blocks for r in b.releases],
-               events=[e for b in blocks for e in b.events], counts=dict(detector.counts))
+               events=[e for b in blocks for e in b.events], counts=dict(detector.counts),
+               carried=detector.carried_load)
 
 
 def run_features(events: Iterable[Event], *, extractor: StreamingFeatureExtractor,

@@ -27,6 +27,7 @@ from typing import Optional, Sequence
 from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
+from contact_detector.features.carried import CarriedLoad, measure_carried_load
 from contact_detector.features.config import (CARRIED_FEATURES, CHANGE_FEATURES,
                                               DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
                                               PAPER_FEATURES, SHIFT_FEATURES)
@@ -85,6 +86,8 @@ class ForceTorqueStream:
         if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
         self._want_carried = bool(set(self.use_delta) & set(CARRIED_FEATURES))
+        #: Whether the features use the carried load (then it is measured, else never).
+        self.uses_carried = self._want_carried
         if self._want_carried:
             need = max(need, config.carried_window)
         self.first_end = need - 1
@@ -120,6 +123,8 @@ class ForceTorqueStream:
         """Forget everything, including the last stamp seen and the carried load."""
         self.last_input_t: Optional[float] = None
         self.carried: Optional[np.ndarray] = None
+        #: The last completed measurement (load, how far it moved), None before the first.
+        self.carried_load: Optional[CarriedLoad] = None
         self.measure_carried()
         self._restart()
 
@@ -280,7 +285,9 @@ class ForceTorqueStream:
         self._carried_rows.extend(dec_v[:missing])
         if dec_v.shape[0] >= missing:
             self._previous_carried = self.carried
-            self.carried = np.median(self._carried_rows.view, axis=0)
+            self.carried_load = measure_carried_load(rows=self._carried_rows.view,
+                                                     floor=self._floor)
+            self.carried = self.carried_load.load
             self._carried_from = self._n_dec + missing - 1
             self._measuring = False
 

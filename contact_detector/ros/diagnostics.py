@@ -20,7 +20,9 @@ The node's ``/diagnostics``: input rates and ages, latency, counters, and one st
 detector``) whose level says, in this order of precedence: ERROR while the audio is refused;
 WARN while waiting for the first input, on a measured wrench rate far from ``wrench.rate``, on
 a stale or missing input, on any increase of a :data:`WARN_COUNTERS` counter during the
-period, and while the F/T-only fallback model stands in; OK otherwise. Each period is a new
+period, while armed with a carried load that moved while it was measured
+(:class:`~contact_detector.features.carried.CarriedLoad`), and while the F/T-only fallback
+model stands in; OK otherwise. Each period is a new
 measurement window (rates, latency percentiles, counter increases).
 """
 
@@ -114,6 +116,15 @@ class DiagnosticsMixin:
             'frame_age_p99_ms': pct(self._window_age, 99),
             'last_error': det.last_error or '',
         })
+        carried = det.carried_load
+        if carried is None:
+            values['carried_load'] = ('measuring' if det.extractor.ft.uses_carried
+                                      else 'not used by the model')
+        else:
+            values.update({'carried_load': carried.status,
+                           'carried_force_n': f'{carried.force_n:.3f}',
+                           'carried_torque_nm': f'{carried.torque_nm:.4f}',
+                           'carried_moved_n': f'{carried.moved[0]:.3f}'})
         values.update({name: str(value) for name, value in sorted(counts.items())})
         values['audio_received'] = str(self.audio.received)
         values['wrench_received'] = str(self.wrench.received)
@@ -149,6 +160,10 @@ class DiagnosticsMixin:
         elif troubles:
             level, message = DiagnosticStatus.WARN, 'bad input: ' + ', '.join(
                 f'{name} +{value}' for name, value in troubles.items())
+        elif det.armed and carried is not None and not carried.steady:
+            level, message = DiagnosticStatus.WARN, (
+                f'carried load moved by {carried.moved[0]:.2f} N while it was measured: arm '
+                'again (~/arm) while the hand holds the object still')
         else:
             level, message = DiagnosticStatus.OK, (
                 f'running, release {"armed" if det.armed else "disarmed"}')

@@ -59,6 +59,7 @@ from typing import Any, Callable, Dict, Optional
 from contact_detector.detection.detector import ContactDetector, Decisions, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError, InputError, ModelError
+from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.resample import StampRate
 from contact_detector.io.cdr import (BOOL_FALSE, BOOL_TRUE, FAST_DECODERS,
                                      read_wrench_stamped, write_float32)
@@ -229,6 +230,7 @@ class DetectorWiring(DiagnosticsMixin):
         self.detector = self._build_detector(rate=cfg.audio_sample_rate,
                                              armed=cfg.release_armed_on_start)
         self._time_jumps_seen = 0
+        self._carried_seen = None           # the last carried-load measurement logged
         self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
                          'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
@@ -519,6 +521,11 @@ class DetectorWiring(DiagnosticsMixin):
         if jumps != self._time_jumps_seen:
             self._time_jumps_seen = jumps
             self.get_logger().warning(f'{self.detector.last_error}; warming up again')
+        carried = self.detector.carried_load
+        if carried is not self._carried_seen:
+            self._carried_seen = carried
+            if carried is not None:
+                self._log_carried(carried)
         switches = getattr(self.detector, 'switch_messages', None)
         if switches:
             for line in switches:
@@ -540,6 +547,15 @@ class DetectorWiring(DiagnosticsMixin):
         self._latency[kind].append(latency)
         self._window_latency.append(latency)
         self._window_age.append(now + latency - float(decisions.t[-1]))
+
+    def _log_carried(self, carried: CarriedLoad) -> None:
+        # One line per measurement (each start, reset and arming): the load the carried-load
+        # features compare with, and a warning when it moved while it was measured.
+        if carried.steady:
+            self.get_logger().info(carried.describe())
+        else:
+            self.get_logger().warning(carried.describe() + ': arm again (~/arm) while the '
+                                      'hand holds the object still')
 
     def _release(self, t: float) -> None:
         self.release_pub.publish(Bool(data=True))

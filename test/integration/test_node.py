@@ -21,6 +21,7 @@ time is simulated (``use_sim_time``, the test publishes ``/clock`` like ``ros2 b
 can be compared with :class:`ContactDetector` run offline on the same arrays and stamps.
 """
 
+from dataclasses import replace
 import importlib.util
 import os
 from pathlib import Path
@@ -429,6 +430,44 @@ def test_wrench_at_another_rate_than_configured_is_reported(harness_factory, tri
     assert 'wrench arrives at 200 Hz but wrench.rate is 100 Hz' in status.message
     assert float(values['wrench_measured_rate_hz']) == pytest.approx(200.0, rel=1e-3)
     assert sum('wrench arrives at' in text for text in logged) == 1     # one line, not a flood
+
+
+def test_carried_load_is_logged_and_a_load_that_moved_is_reported(harness_factory, trial):
+    """The carried load of each measurement in one log line; armed while it moved: WARN."""
+    h = harness_factory(**{'release.armed_on_start': False})
+    logged = {'info': [], 'warning': []}
+    logger = h.node.get_logger()
+    # one wrapper per severity: rclpy refuses two severities from one call site
+    info, warning = logger.info, logger.warning
+    logger.info = lambda text, *a, **k: (logged['info'].append(text), info(text, *a, **k))
+    logger.warning = lambda text, *a, **k: (logged['warning'].append(text),
+                                            warning(text, *a, **k))
+    t0 = trial.start_time
+    # the start's measurement: the hand holds the object still
+    h.feed(trial, node_support.trial_events(trial, t_to=t0 + 1.0))
+    held = float(np.linalg.norm(np.median(trial.force[:50], axis=0)))
+    assert [line for line in logged['info'] if line.startswith('carried load')] == [
+        f'carried load measured over 50 F/T samples: |F| {held:.2f} N, '
+        f'|T| {float(np.linalg.norm(np.median(trial.torque[:50], axis=0))):.3f} N m']
+    h.node.diagnostics()
+    status, values = diag_values_of(h.node.diagnostics())
+    assert values['carried_load'] == 'steady'
+    assert float(values['carried_force_n']) == pytest.approx(held, abs=0.01)
+    # armed while the hand still takes 4 N more (a grasp, a lift): WARN until armed again
+    assert h.call(h.arm, SetBool.Request(data=True)).success
+    grasp = trial.force.copy()
+    grasp[trial.wrench_t >= t0 + 1.25, 2] -= 4.0
+    h.feed(replace(trial, force=grasp),
+           node_support.trial_events(trial, t_from=t0 + 1.0, t_to=t0 + 2.0))
+    moved = [line for line in logged['warning'] if line.startswith('carried load')]
+    assert len(moved) == 1 and 'moved by 4.0' in moved[0] and '~/arm' in moved[0]
+    status, values = diag_values_of(h.node.diagnostics())
+    assert values['carried_load'] == 'moved'
+    assert status.level == DiagnosticStatus.WARN and 'carried load moved' in status.message
+    # disarmed, it compares with nothing that could release: the status is no longer WARN
+    assert h.call(h.arm, SetBool.Request(data=False)).success
+    status, values = diag_values_of(h.node.diagnostics())
+    assert status.level == DiagnosticStatus.OK
 
 
 def diag_values_of(array):

@@ -83,6 +83,20 @@ def test_an_unload_releases_and_a_push_across_the_load_does_not(bundle, in_block
     assert push.releases == []
 
 
+def test_a_run_reports_the_carried_load_it_compared_with(bundle):
+    # the first 0.5 s hold 5 N still: steady; a recording that starts during the grasp (the
+    # 5 N arrive 0.25 s in) has moved, and says by how much
+    still = run_detector(_events([0, 0, 1.0]), detector=_detector(bundle))
+    assert still.carried.status == 'steady'
+    assert still.carried.force_n == pytest.approx(5.0, abs=0.02)
+    grasp = _events([0, 0, 1.0])
+    for event in grasp[:25]:
+        event.force[:, 2] += 5.0
+    late = run_detector(grasp, detector=_detector(bundle))
+    assert late.carried.status == 'moved'
+    assert late.carried.moved[0] == pytest.approx(5.0, abs=0.05)
+
+
 def test_arming_measures_the_carried_load_again(bundle):
     # the node started with an empty, tared hand (no carried load: the cosine is 0, nothing
     # releases); 1 s later the hand holds 5 N. Armed then, the carried load is those 5 N and
@@ -116,3 +130,5 @@ def test_the_audio_fallback_measures_the_carried_load_again_in_both_models(bundl
         detector.on_wrench_one(t=T0 + k / RATE, values=[0.0, 0.0, -6.0, 0.0, 0.0, 0.0],
                                now=T0 + k / RATE)
     assert [d.extractor.ft.carried[2] for d in both] == [-6.0, -6.0]
+    assert detector.carried_load is detector.primary.carried_load
+    assert detector.carried_load.force_n == 6.0
