@@ -48,6 +48,9 @@ BASELINES = ('threshold', 'highpass', 'lowpass-bandpass', 'audio-onset')
 class _Baseline:
     """Shared plumbing: counters, release logic, decisions at the wrench or audio rate."""
 
+    #: The baselines compare with no carried load (the detector interface's attribute).
+    carried_load = None
+
     def __init__(self, *, wrench_rate: float, audio_rate: float, armed: bool = True,
                  calibration_s: float = 1.0) -> None:
         self.wrench_rate = wrench_rate

@@ -172,7 +172,10 @@ def write_report(*, report: Path, results: Dict[str, dict]) -> None:
     ax.axvline(0, color='k', lw=0.8)
     ax.set_xlabel('release time - true onset [ms] (negative = premature)')
     ax.set_ylabel('trials')
-    ax.legend()
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend()
+    else:   # no detector released (e.g. recordings whose F/T stops at the contact)
+        ax.text(0.5, 0.5, 'no release', transform=ax.transAxes, ha='center')
     fig.tight_layout()
     fig.savefig(report / 'latency.png', dpi=120)
     plt.close(fig)
