@@ -31,6 +31,13 @@ which must decide causally, this sees the whole recording and works in three ste
    falls to its floor gives the pre-event baseline ``b``: the median of ``w`` over ``pre_s``
    before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
    the load change along it and ``sigma_y`` its MAD-based standard deviation in the baseline.
+   When ``sigma_y > whiten_sigma`` (liquid slosh, a structural mode or motor ripple many times
+   the sensor's noise) ``y`` is the projection on the whitened direction ``u_w`` instead
+   (:func:`whitened_direction`, from the covariance of ``w`` over ``whiten_s`` before the
+   window's end), if that lowers ``sigma_y``: each of those moves the load along its own
+   direction of the 6-D space, a slosh sideways at the object, the contact along the table's
+   normal at the contact point, so the projection that cancels the baseline's own variation
+   keeps the contact's change and drops most of the oscillation.
    Searching backwards from where ``y`` reaches ``fit_frac`` of the change, sample ``m`` is the
    first after the latest run of ``quiet_s`` in the band: every sample's 3-sample running
    median ``<= k_sigma sigma_y`` and the sample itself ``<= spike_k sigma_y`` (a dip after an
@@ -217,6 +224,12 @@ class LabelSettings:
         A sound starting after this many frames under ``audio_rise`` is a new one.
     audio_peak_frames : int
         A sound's peak power is its largest frame power over this many frames from its start.
+    whiten_sigma : float
+        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is projected on the
+        whitened change direction (:func:`whitened_direction`) when that lowers ``sigma_y``.
+    whiten_s : float
+        Length of the baseline before the pre-event window's end whose covariance whitens it
+        (at least one period of the slowest slosh, 1.5 Hz).
 
     """
 
@@ -260,6 +273,8 @@ class LabelSettings:
     faint_samples: int = 4
     knee_frac: float = 0.25
     knee_pre_s: float = 0.2
+    whiten_sigma: float = 3.0
+    whiten_s: float = 1.0
 
 
 @dataclass
@@ -311,6 +326,43 @@ def noise_sigma(x: np.ndarray) -> float:
     mad = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0)
     s = np.where(mad > 0, mad, np.std(d, axis=0)) / math.sqrt(2.0)
     return max(float(np.sqrt(np.mean(s ** 2))), 1e-9)
+
+
+def _robust_sd(x: np.ndarray) -> float:
+    """MAD-based standard deviation of ``x`` (at least 1e-9)."""
+    return max(1.4826 * float(np.median(np.abs(x - np.median(x)))), 1e-9)
+
+
+def whitened_direction(*, w: np.ndarray, u: np.ndarray) -> np.ndarray:
+    r"""
+    Whiten the change direction ``u`` by the covariance of the baseline ``w``.
+
+    .. math:: u_w = \frac{(C + I)^{-1} u}{u^\top (C + I)^{-1} u}, \quad
+              C = \frac{1}{n} \sum_j (w_j - \bar w)(w_j - \bar w)^\top
+
+    ``y_w = (w - b) . u_w`` is the matched filter for a change along ``u`` in interference
+    with covariance ``C`` (slosh, a structural mode, ripple: each moves the load along its own
+    direction of the 6-D space). It keeps the change's scale (``change . u_w = |change|``)
+    and cancels the interference's part that lies outside ``u``. ``I`` is the sensor's noise
+    (``w`` is in its units) once more: directions the baseline did not explore are not
+    trusted more than the noise allows.
+
+    Parameters
+    ----------
+    w : np.ndarray, shape (n, k)
+        Baseline samples in sensor-noise units.
+    u : np.ndarray, shape (k,)
+        Unit direction of the change.
+
+    Returns
+    -------
+    np.ndarray, shape (k,)
+
+    """
+    d = w - w.mean(axis=0)
+    cov = d.T @ d / max(len(d), 1) + np.eye(len(u))
+    v = np.linalg.solve(cov, u)
+    return v / float(u @ v)
 
 
 def _running_median(x: np.ndarray, n: int) -> np.ndarray:
@@ -560,8 +612,16 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     change = np.median(w[a:min(b, a + int(round(s.smooth_s / dt)) + 1)], axis=0) - base
     u = change / max(float(np.linalg.norm(change)), 1e-12)
     y = (w - base) @ u
-    base_y = y[j0:j1]
-    sd = max(1.4826 * float(np.median(np.abs(base_y - np.median(base_y)))), 1e-9)
+    sd = _robust_sd(y[j0:j1])
+    if sd > s.whiten_sigma:
+        # a busy baseline (slosh, a structural mode, ripple) moves the load along its own
+        # directions: project on the change direction whitened by the baseline's covariance
+        k0 = max(0, j1 - int(round(s.whiten_s / dt)))
+        u_w = whitened_direction(w=w[k0:j1], u=u)
+        y_w = (w - base) @ u_w
+        sd_w = _robust_sd(y_w[j0:j1])
+        if sd_w < sd:
+            y, sd = y_w, sd_w
     target = max(s.fit_frac * float(np.linalg.norm(change)), s.k_sigma * sd)
     reach = np.nonzero(y[i:b] >= target)[0]
     r = i + (int(reach[0]) if len(reach) else 0)
