@@ -70,7 +70,11 @@ which must decide causally, this sees the whole recording and works in three ste
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual winning; a
    rise that *steps out* of the noise (sample ``m`` at ``spike_k`` sigma or more, the two before it
    within ``sharp_prev`` sigma, the CUSUM not moving it) started within ``step_back_samples`` (1.5)
-   sample periods of ``t_m``. That short fit cannot reach back past ``back_samples`` on a rise that
+   sample periods of ``t_m``; when the CUSUM moved the onset and ``y`` climbs at least
+   ``cusum_k`` sigma per sample from the sample before ``n0`` to ``m``, within
+   ``moved_back_samples`` (1) of ``t_n0`` (such a rise passed the allowance within a sample of
+   its start; ``back_samples`` makes up for the band's late crossing, which the CUSUM has
+   undone). That short fit cannot reach back past ``back_samples`` on a rise that
    creeps out of the noise, so a second, linear (p = 1) hinge, the knee of flat-then-rising, is
    fitted over the whole early rise, from ``knee_pre_s`` before ``n0`` (not before the baseline
    window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
@@ -224,6 +228,10 @@ class LabelSettings:
         A sound starting after this many frames under ``audio_rise`` is a new one.
     audio_peak_frames : int
         A sound's peak power is its largest frame power over this many frames from its start.
+    moved_back_samples : float
+        When the CUSUM moved the onset before sample ``m`` and ``y`` climbs at least ``cusum_k``
+        sigma per sample from there to ``m``, the short hinge searches its onset up to this
+        many sample periods before the CUSUM's sample (instead of ``back_samples``).
     whiten_sigma : float
         A baseline whose ``sigma_y`` exceeds this many sensor-noise units is projected on the
         whitened change direction (:func:`whitened_direction`) when that lowers ``sigma_y``.
@@ -274,6 +282,7 @@ class LabelSettings:
     knee_frac: float = 0.25
     knee_pre_s: float = 0.2
     whiten_sigma: float = 3.0
+    moved_back_samples: float = 1.0
     whiten_s: float = 1.0
 
 
@@ -672,6 +681,12 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         stepped = (n0 == m and m >= 2 and y[m] >= s.spike_k * sd
                    and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
         back = s.step_back_samples if stepped else s.back_samples
+        if n0 < m and (y[m] - y[max(n0 - 1, 0)]) / (m - n0 + 1) >= s.cusum_k * sd:
+            # the CUSUM moved the onset to the first sample of a rise that climbs at least
+            # its allowance per sample: that sample passed the allowance within one sample
+            # period of the rise's start (back_samples makes up for the band's late crossing,
+            # which the CUSUM has already undone; a slower creep keeps it)
+            back = min(back, s.moved_back_samples)
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
                              lo=float(t[n0]) - back * dt, hi=float(t[n0]))[0]
         # the knee of flat-then-linear over the whole early rise (to knee_frac of the

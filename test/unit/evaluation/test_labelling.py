@@ -16,8 +16,8 @@
 Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
 Also: sounds before a sharp F/T departure, the dominant sound in the window, the onset of a
-gradual soft rise inside its first sample and of a rise that steps out of the noise, and a
-baseline busy with liquid slosh.
+gradual soft rise inside its first sample and of a rise that steps out of the noise, a rise
+the CUSUM moved back, and a baseline busy with liquid slosh.
 
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
@@ -273,3 +273,16 @@ def test_a_soft_rise_under_liquid_slosh_is_found_within_20_ms(seed):
         seed=seed, amp=5.0)
     p = propose_onset(ft_t=t, force=force, torque=torque)
     assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+
+
+def test_a_rise_the_cusum_moved_back_is_not_extrapolated_two_more_samples():
+    # an impact bump (0.3 N, 20 ms) and a lagged ramp: noise lifts the samples before the
+    # band crossing, the CUSUM moves the onset back to them, and the rise climbs more than
+    # its 2-sigma allowance per sample from there. The short hinge, allowed 2 samples before
+    # the CUSUM's sample, put the onset 26 ms early; it passed the allowance within a sample
+    # of the start, so one sample back at most (16 ms early, the noise's doing)
+    delay = 0.002
+    t, force, torque = _wrench(_bump_then(peak=0.3, width=0.02, slope=60.0, lag=0.1, top=20.0,
+                                          delay=delay), seed=3)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET - delay) <= 0.020, (p.onset_t - ONSET - delay) * 1e3
