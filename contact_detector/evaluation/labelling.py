@@ -228,13 +228,13 @@ class LabelSettings:
         A sound starting after this many frames under ``audio_rise`` is a new one.
     audio_peak_frames : int
         A sound's peak power is its largest frame power over this many frames from its start.
+    whiten_sigma : float
+        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is projected on the
+        whitened change direction (:func:`whitened_direction`) when that lowers ``sigma_y``.
     moved_back_samples : float
         When the CUSUM moved the onset before sample ``m`` and ``y`` climbs at least ``cusum_k``
         sigma per sample from there to ``m``, the short hinge searches its onset up to this
         many sample periods before the CUSUM's sample (instead of ``back_samples``).
-    whiten_sigma : float
-        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is projected on the
-        whitened change direction (:func:`whitened_direction`) when that lowers ``sigma_y``.
     whiten_s : float
         Length of the baseline before the pre-event window's end whose covariance whitens it
         (at least one period of the slowest slosh, 1.5 Hz).
