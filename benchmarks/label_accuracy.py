@@ -21,6 +21,8 @@ Simulates the trials as bags (``contact-detector simulate``, the condition sets 
 ``contact-detector label`` on them and compares each proposed onset with the manifest's
 ``onset_t``: per family the median, 99th percentile and largest |error| in ms and the share
 within 20 ms, then the same over all trials. An unlabelled bag counts as an infinite error.
+``--list-over MS`` then lists each trial whose |error| exceeds MS ms (bag, family, signed
+error: negative = proposed before the truth), ``--list-family NAME`` every trial of a family.
 """
 
 import argparse
@@ -50,6 +52,10 @@ def main() -> int:
     parser.add_argument('--ft-rate', type=float, default=100.0)
     parser.add_argument('--dir', type=Path, default=None,
                         help='keep the bags here (default: a temporary directory)')
+    parser.add_argument('--list-over', type=float, default=None, metavar='MS',
+                        help='list the trials whose |error| exceeds MS ms')
+    parser.add_argument('--list-family', default=None, metavar='NAME',
+                        help="list every trial of this family (e.g. 'soft')")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         out = args.dir or Path(tmp)
@@ -63,11 +69,16 @@ def main() -> int:
         with open(Path(tmp) / 'labels.csv') as handle:
             rows = {r['bag']: r for r in csv.DictReader(handle)}
     by_family: dict[str, list[float]] = {}
+    listed = []
     for trial in trials:
         row = rows.get(Path(trial['bag']).name)
-        err = abs(float(row['onset_start']) - trial['onset_t']) * 1e3 \
+        signed = (float(row['onset_start']) - trial['onset_t']) * 1e3 \
             if row and row['onset_start'] else np.inf
+        err = abs(signed)
         by_family.setdefault(trial['condition'], []).append(err)
+        if ((args.list_over is not None and err > args.list_over)
+                or trial['condition'] == args.list_family):
+            listed.append((Path(trial['bag']).name, trial['condition'], signed))
     every = [e for errs in by_family.values() for e in errs]
     print('| family | trials | median ms | p99 ms | max ms | within 20 ms |')
     print('|---|---|---|---|---|---|')
@@ -76,6 +87,10 @@ def main() -> int:
         ok = int(np.sum(e <= 20))
         print(f'| {name} | {len(e)} | {np.median(e):.1f} | {np.percentile(e, 99):.1f} | '
               f'{e.max():.1f} | {100 * ok / len(e):.1f} % ({ok}/{len(e)}) |')
+    if listed:
+        print('\n| trial | family | error ms |\n|---|---|---|')
+        for name, family, signed in listed:
+            print(f'| {name} | {family} | {signed:+.1f} |')
     return 0
 
 

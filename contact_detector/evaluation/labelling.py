@@ -31,6 +31,13 @@ which must decide causally, this sees the whole recording and works in three ste
    falls to its floor gives the pre-event baseline ``b``: the median of ``w`` over ``pre_s``
    before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
    the load change along it and ``sigma_y`` its MAD-based standard deviation in the baseline.
+   When ``sigma_y > whiten_sigma`` (liquid slosh, a structural mode or motor ripple many times
+   the sensor's noise) ``y`` is the projection on the whitened direction ``u_w`` instead
+   (:func:`whitened_direction`, from the covariance of ``w`` over ``whiten_s`` before the
+   window's end), if that lowers ``sigma_y``: each of those moves the load along its own
+   direction of the 6-D space, a slosh sideways at the object, the contact along the table's
+   normal at the contact point, so the projection that cancels the baseline's own variation
+   keeps the contact's change and drops most of the oscillation.
    Searching backwards from where ``y`` reaches ``fit_frac`` of the change, sample ``m`` is the
    first after the latest run of ``quiet_s`` in the band: every sample's 3-sample running
    median ``<= k_sigma sigma_y`` and the sample itself ``<= spike_k sigma_y`` (a dip after an
@@ -63,7 +70,11 @@ which must decide causally, this sees the whole recording and works in three ste
    (sub-sample resolution), ``c, a`` solved in closed form, the least squared residual winning; a
    rise that *steps out* of the noise (sample ``m`` at ``spike_k`` sigma or more, the two before it
    within ``sharp_prev`` sigma, the CUSUM not moving it) started within ``step_back_samples`` (1.5)
-   sample periods of ``t_m``. That short fit cannot reach back past ``back_samples`` on a rise that
+   sample periods of ``t_m``; when the CUSUM moved the onset and ``y`` climbs at least
+   ``cusum_k`` sigma per sample from the sample before ``n0`` to ``m``, within
+   ``moved_back_samples`` (1) of ``t_n0`` (such a rise passed the allowance within a sample of
+   its start; ``back_samples`` makes up for the band's late crossing, which the CUSUM has
+   undone). That short fit cannot reach back past ``back_samples`` on a rise that
    creeps out of the noise, so a second, linear (p = 1) hinge, the knee of flat-then-rising, is
    fitted over the whole early rise, from ``knee_pre_s`` before ``n0`` (not before the baseline
    window) to where ``y`` reaches ``knee_frac`` of the change, with ``t0`` in
@@ -217,6 +228,16 @@ class LabelSettings:
         A sound starting after this many frames under ``audio_rise`` is a new one.
     audio_peak_frames : int
         A sound's peak power is its largest frame power over this many frames from its start.
+    whiten_sigma : float
+        A baseline whose ``sigma_y`` exceeds this many sensor-noise units is projected on the
+        whitened change direction (:func:`whitened_direction`) when that lowers ``sigma_y``.
+    moved_back_samples : float
+        When the CUSUM moved the onset before sample ``m`` and ``y`` climbs at least ``cusum_k``
+        sigma per sample from there to ``m``, the short hinge searches its onset up to this
+        many sample periods before the CUSUM's sample (instead of ``back_samples``).
+    whiten_s : float
+        Length of the baseline before the pre-event window's end whose covariance whitens it
+        (at least one period of the slowest slosh, 1.5 Hz).
 
     """
 
@@ -260,6 +281,9 @@ class LabelSettings:
     faint_samples: int = 4
     knee_frac: float = 0.25
     knee_pre_s: float = 0.2
+    whiten_sigma: float = 3.0
+    moved_back_samples: float = 1.0
+    whiten_s: float = 1.0
 
 
 @dataclass
@@ -311,6 +335,43 @@ def noise_sigma(x: np.ndarray) -> float:
     mad = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0)
     s = np.where(mad > 0, mad, np.std(d, axis=0)) / math.sqrt(2.0)
     return max(float(np.sqrt(np.mean(s ** 2))), 1e-9)
+
+
+def _robust_sd(x: np.ndarray) -> float:
+    """MAD-based standard deviation of ``x`` (at least 1e-9)."""
+    return max(1.4826 * float(np.median(np.abs(x - np.median(x)))), 1e-9)
+
+
+def whitened_direction(*, w: np.ndarray, u: np.ndarray) -> np.ndarray:
+    r"""
+    Whiten the change direction ``u`` by the covariance of the baseline ``w``.
+
+    .. math:: u_w = \frac{(C + I)^{-1} u}{u^\top (C + I)^{-1} u}, \quad
+              C = \frac{1}{n} \sum_j (w_j - \bar w)(w_j - \bar w)^\top
+
+    ``y_w = (w - b) . u_w`` is the matched filter for a change along ``u`` in interference
+    with covariance ``C`` (slosh, a structural mode, ripple: each moves the load along its own
+    direction of the 6-D space). It keeps the change's scale (``change . u_w = |change|``)
+    and cancels the interference's part that lies outside ``u``. ``I`` is the sensor's noise
+    (``w`` is in its units) once more: directions the baseline did not explore are not
+    trusted more than the noise allows.
+
+    Parameters
+    ----------
+    w : np.ndarray, shape (n, k)
+        Baseline samples in sensor-noise units.
+    u : np.ndarray, shape (k,)
+        Unit direction of the change.
+
+    Returns
+    -------
+    np.ndarray, shape (k,)
+
+    """
+    d = w - w.mean(axis=0)
+    cov = d.T @ d / max(len(d), 1) + np.eye(len(u))
+    v = np.linalg.solve(cov, u)
+    return v / float(u @ v)
 
 
 def _running_median(x: np.ndarray, n: int) -> np.ndarray:
@@ -560,8 +621,16 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     change = np.median(w[a:min(b, a + int(round(s.smooth_s / dt)) + 1)], axis=0) - base
     u = change / max(float(np.linalg.norm(change)), 1e-12)
     y = (w - base) @ u
-    base_y = y[j0:j1]
-    sd = max(1.4826 * float(np.median(np.abs(base_y - np.median(base_y)))), 1e-9)
+    sd = _robust_sd(y[j0:j1])
+    if sd > s.whiten_sigma:
+        # a busy baseline (slosh, a structural mode, ripple) moves the load along its own
+        # directions: project on the change direction whitened by the baseline's covariance
+        k0 = max(0, j1 - int(round(s.whiten_s / dt)))
+        u_w = whitened_direction(w=w[k0:j1], u=u)
+        y_w = (w - base) @ u_w
+        sd_w = _robust_sd(y_w[j0:j1])
+        if sd_w < sd:
+            y, sd = y_w, sd_w
     target = max(s.fit_frac * float(np.linalg.norm(change)), s.k_sigma * sd)
     reach = np.nonzero(y[i:b] >= target)[0]
     r = i + (int(reach[0]) if len(reach) else 0)
@@ -612,6 +681,12 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         stepped = (n0 == m and m >= 2 and y[m] >= s.spike_k * sd
                    and max(y[m - 1], y[m - 2]) <= s.sharp_prev * sd)
         back = s.step_back_samples if stepped else s.back_samples
+        if n0 < m and (y[m] - y[max(n0 - 1, 0)]) / (m - n0 + 1) >= s.cusum_k * sd:
+            # the CUSUM moved the onset to the first sample of a rise that climbs at least
+            # its allowance per sample: that sample passed the allowance within one sample
+            # period of the rise's start (back_samples makes up for the band's late crossing,
+            # which the CUSUM has already undone; a slower creep keeps it)
+            back = min(back, s.moved_back_samples)
         ft_onset = hinge_fit(t=t[k_start:e + 1], y=y[k_start:e + 1], dt=dt,
                              lo=float(t[n0]) - back * dt, hi=float(t[n0]))[0]
         # the knee of flat-then-linear over the whole early rise (to knee_frac of the

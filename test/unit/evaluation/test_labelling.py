@@ -16,7 +16,8 @@
 Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
 Also: sounds before a sharp F/T departure, the dominant sound in the window, the onset of a
-gradual soft rise inside its first sample and of a rise that steps out of the noise.
+gradual soft rise inside its first sample and of a rise that steps out of the noise, a rise
+the CUSUM moved back, and a baseline busy with liquid slosh.
 
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
@@ -24,7 +25,7 @@ axis. The load acts along -z with a lever arm, so force and torque change togeth
 is white noise at 16 kHz with, where a test adds one, a faint click (a decaying noise burst).
 """
 
-from contact_detector.evaluation.labelling import cusum_start, propose_onset
+from contact_detector.evaluation.labelling import cusum_start, propose_onset, whitened_direction
 import numpy as np
 import pytest
 
@@ -233,3 +234,55 @@ def test_in_band_bumps_before_an_impact_do_not_move_it_early(seed):
     p = propose_onset(ft_t=t, force=force, torque=torque)
     assert p.source == 'ft'
     assert abs(p.onset_t - ONSET) <= 0.005, (p.onset_t - ONSET) * 1e3
+
+
+def test_the_whitened_direction_cancels_an_interference_outside_the_change():
+    # an oscillation along v (not along the change u) of 20 noise units: its projection on u
+    # has a standard deviation of 6, on the whitened direction about the noise's; the change
+    # keeps its size
+    rng = np.random.default_rng(0)
+    u = np.array([0.0, 0.0, 1.0, 1.0, 0.0, 0.0]) / np.sqrt(2.0)
+    v = np.array([0.8, 0.0, 0.6, 0.0, 0.0, 0.0])
+    base = 20.0 * np.outer(np.sin(np.linspace(0.0, 6.0 * np.pi, 100)), v)
+    base += rng.normal(0.0, 1.0, base.shape)
+    u_w = whitened_direction(w=base, u=u)
+    assert np.std(base @ u) > 5.0
+    assert np.std(base @ u_w) < 1.5
+    assert (30.0 * u) @ u_w == pytest.approx(30.0)
+
+
+def _sloshing(load_fn, *, seed: int, amp: float) -> tuple:
+    """``_wrench`` plus liquid slosh: ``amp`` N at 2.5 Hz, mostly sideways, damped slowly."""
+    t, force, torque = _wrench(load_fn, seed=seed)
+    phase = np.random.default_rng(100 + seed).uniform(0.0, 2.0 * np.pi)
+    slosh = amp * np.sin(2.0 * np.pi * 2.5 * t + phase) * np.exp(-0.2 * t)
+    force[:, 0] += 0.8 * slosh
+    force[:, 2] += 0.6 * slosh
+    torque[:, 1] += 0.08 * slosh
+    return t, force, torque
+
+
+@pytest.mark.parametrize('seed', [2, 3, 7])
+def test_a_soft_rise_under_liquid_slosh_is_found_within_20_ms(seed):
+    # 5 N of slosh (20 noise units along the load's direction) and a lagged soft rise: the
+    # projection on the change direction took a slosh swing for the rise and put the onset
+    # 120-200 ms early; the slosh lies mostly outside the change's direction, and the
+    # whitened projection cancels it (the onset is then 1-12 ms late)
+    t, force, torque = _sloshing(
+        lambda tau: np.minimum(200.0 * tau * (1.0 - np.exp(-tau / 0.05)), 10.0),
+        seed=seed, amp=5.0)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+
+
+def test_a_rise_the_cusum_moved_back_is_not_extrapolated_two_more_samples():
+    # an impact bump (0.3 N, 20 ms) and a lagged ramp: noise lifts the samples before the
+    # band crossing, the CUSUM moves the onset back to them, and the rise climbs more than
+    # its 2-sigma allowance per sample from there. The short hinge, allowed 2 samples before
+    # the CUSUM's sample, put the onset 26 ms early; it passed the allowance within a sample
+    # of the start, so one sample back at most (16 ms early, the noise's doing)
+    delay = 0.002
+    t, force, torque = _wrench(_bump_then(peak=0.3, width=0.02, slope=60.0, lag=0.1, top=20.0,
+                                          delay=delay), seed=3)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET - delay) <= 0.020, (p.onset_t - ONSET - delay) * 1e3
