@@ -74,6 +74,10 @@ LOFO_SETTINGS = {
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
+    # the shipped columns and the share of the carried torque against that of the carried
+    # force that changed: a table takes the weight off under the centre of mass, a brush or a
+    # knock pushes elsewhere (docs/generalisation.md, "A brush against the table")
+    'lever': tuple(DEFAULT_FEATURES.feature_names) + ('ft_carried_lever',),
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
