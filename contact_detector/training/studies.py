@@ -290,10 +290,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                     # the fold's test trials are its family's frames, in order
                     pooled_knocked.setdefault(k, []).extend(
                         o for o, hit in zip(row.outcomes, knocked[fold.family]) if hit)
-        families = sorted({family for _, family in pooled})
+        scored = sorted({family for _, family in pooled})
         for k, rule in enumerate(rules):
             summaries = []
-            for family in families:
+            for family in scored:
                 s = dict(summarize(pooled[(k, family)]), family=family)
                 summaries.append(s)
                 family_lines.append(f'| {name} | {rule.short()} | {family} | '

@@ -746,15 +746,16 @@ def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data
     families = sorted({t.condition for t in data['trials'].values()})
     assert len(families) >= 2
     out = tmp_path / 'lofo.md'
-    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
-                           '--jobs', '1', '--lofo-families', families[0],
+    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped,previous', '--trees',
+                           '2', '--jobs', '1', '--lofo-families', families[0],
                            '--out', str(out)]) == 0
     text = out.read_text()
-    assert f'Left out: only {families[0]}' in text
+    assert f'Left out: only {families[0]} (a screen' in text
     family_part = text.split('## Every family')[1]
-    rows = [[c.strip() for c in line.strip('|').split('|')]
-            for line in family_part.splitlines() if line.startswith('| shipped')]
-    assert rows and {r[2] for r in rows} == {families[0]}
+    for setting in ('shipped', 'previous'):
+        rows = [[c.strip() for c in line.strip('|').split('|')]
+                for line in family_part.splitlines() if line.startswith(f'| {setting} |')]
+        assert rows and {r[2] for r in rows} == {families[0]}
     with pytest.raises(SystemExit):
         sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
                         '--jobs', '1', '--lofo-families', 'no_such_family'])
