@@ -28,6 +28,7 @@ from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, CARRIED_DERIVED,
                                               CARRIED_FEATURES, DELTA_FEATURES, FeatureConfig,
                                               HOLD_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.deltas import LEVER_EPS
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
@@ -185,8 +186,8 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                 dot = sum((new_v[a] - base_v[a]) * carried[a] for a in axes)
                 cos = dot / (shift[k] * size) if size >= floors[k] and shift[k] > 0 else 0.0
                 derived[f'{side}_carried_cos'] = min(1.0, max(-1.0, cos))
-            derived['ft_carried_lever'] = math.log((derived['torque_shift_rel'] + 0.02)
-                                                   / (derived['force_shift_rel'] + 0.02))
+            derived['ft_carried_lever'] = math.log((derived['torque_shift_rel'] + LEVER_EPS)
+                                                   / (derived['force_shift_rel'] + LEVER_EPS))
             for name, frames in (('min', config.shift_min_frames),
                                  ('max', config.change_max_frames)):
                 recent = shifts[-frames:]

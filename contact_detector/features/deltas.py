@@ -176,7 +176,7 @@ def carried_lever(*, rel: np.ndarray) -> np.ndarray:
     ``e = LEVER_EPS``. The load a hand carries acts at the object's centre of mass; when the
     table takes part of that weight off below it, the force and its moment about the sensor
     fall by about the same share, and the value is near 0 (a contact off that line moves it by
-    the ratio of the lever arms). A push nearer the sensor than the weight (a brush on the arm
+    the ratio of the lever arms). A push nearer the sensor than the weight (a brush on the hand
     or the object's upper part, a knock on the hand) changes the torque by a smaller share
     (< 0); a sideways push far from the sensor by a larger one (> 0). Shares, not newtons: it
     does not depend on the object's weight or on how the sensor is mounted.
