@@ -25,9 +25,10 @@ import math
 from typing import Optional
 
 from contact_detector.features import spectral
-from contact_detector.features.config import (AUDIO_FEATURES, CARRIED_FEATURES,
-                                              DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
-                                              SHIFT_FEATURES)
+from contact_detector.features.config import (AUDIO_FEATURES, CARRIED_DERIVED,
+                                              CARRIED_FEATURES, DELTA_FEATURES, FeatureConfig,
+                                              HOLD_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.deltas import LEVER_EPS
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
@@ -131,9 +132,10 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     n = config.ft_window
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
-    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(CARRIED_FEATURES)):
+    carried_names = set(CARRIED_FEATURES) | set(CARRIED_DERIVED)
+    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names):
         need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
-    if set(deltas) & set(CARRIED_FEATURES):
+    if set(deltas) & carried_names:
         need = max(need, config.carried_window)
     # the carried load: the per-axis median of the first carried_window samples
     carried = np.median(dec[:config.carried_window], axis=0) if n_blocks else np.zeros(6)
@@ -184,6 +186,8 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                 dot = sum((new_v[a] - base_v[a]) * carried[a] for a in axes)
                 cos = dot / (shift[k] * size) if size >= floors[k] and shift[k] > 0 else 0.0
                 derived[f'{side}_carried_cos'] = min(1.0, max(-1.0, cos))
+            derived['ft_carried_lever'] = math.log((derived['torque_shift_rel'] + LEVER_EPS)
+                                                   / (derived['force_shift_rel'] + LEVER_EPS))
             for name, frames in (('min', config.shift_min_frames),
                                  ('max', config.change_max_frames)):
                 recent = shifts[-frames:]

@@ -78,6 +78,10 @@ PAPER_FEATURES = (
 #: shift in those units); ``*_carried_cos`` is the cosine between the vector change and the
 #: carried load (-1: the change takes the carried load off, as a table does on an untared
 #: sensor; 0 for a change across it, and 0 when the carried load is below the floor).
+#: ``ft_carried_lever`` is ``ln((torque_shift_rel + 0.02) / (force_shift_rel + 0.02))``: 0 when
+#: the torque changed by the same fraction of the carried torque as the force of the carried
+#: force, as when the table takes the weight off under the object's centre of mass; a push
+#: nearer the sensor than the weight, or one with a sideways part, gives another value.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -105,6 +109,7 @@ EXTRA_FEATURES = (
     'torque_shift_rel',
     'force_carried_cos',
     'torque_carried_cos',
+    'ft_carried_lever',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -118,7 +123,7 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
                   'force_shift_max', 'torque_shift_max', 'force_change_hold',
                   'torque_change_hold', 'force_shift_hold', 'torque_shift_hold',
                   'force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
-                  'torque_carried_cos')
+                  'torque_carried_cos', 'ft_carried_lever')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -138,6 +143,9 @@ HOLD_FEATURES = ('force_change_hold', 'torque_change_hold', 'force_shift_hold',
 #: arming (they need the ``*_shift`` vector change and the carried load).
 CARRIED_FEATURES = ('force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
                     'torque_carried_cos')
+
+#: The features computed from :data:`CARRIED_FEATURES` (they need the same carried load).
+CARRIED_DERIVED = ('ft_carried_lever',)
 
 #: :attr:`FeatureConfig.carried_window`, ``carried_floor_force`` and ``carried_floor_torque``
 #: when not given: left out of :meth:`FeatureConfig.to_dict` like ``hold_frames``. 50 samples

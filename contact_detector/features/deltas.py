@@ -163,6 +163,38 @@ def relative_to_carried(*, change: np.ndarray, shift: np.ndarray, carried: np.nd
     return rel, np.clip(cos, -1.0, 1.0)
 
 
+#: The share of the carried load added to both ratios of :func:`carried_lever`, so that a
+#: change within the noise (both ratios near 0) gives 0, not the log of a ratio of noise.
+LEVER_EPS = 0.02
+
+
+def carried_lever(*, rel: np.ndarray) -> np.ndarray:
+    """
+    Compare the torque's and the force's change, each as a share of its carried load.
+
+    ``ft_carried_lever = ln((torque_shift_rel + e) / (force_shift_rel + e))`` with
+    ``e = LEVER_EPS``. The load a hand carries acts at the object's centre of mass; when the
+    table takes part of that weight off below it, the force and its moment about the sensor
+    fall by about the same share, and the value is near 0 (a contact off that line moves it by
+    the ratio of the lever arms). A push nearer the sensor than the weight (a brush on the hand
+    or the object's upper part, a knock on the hand) changes the torque by a smaller share
+    (< 0); a sideways push far from the sensor by a larger one (> 0). Shares, not newtons: it
+    does not depend on the object's weight or on how the sensor is mounted.
+
+    Parameters
+    ----------
+    rel : np.ndarray, shape (m, 2)
+        ``force_shift_rel``, ``torque_shift_rel`` of :func:`relative_to_carried`.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        ``ft_carried_lever``, dimensionless (natural log).
+
+    """
+    return np.log((rel[:, 1] + LEVER_EPS) / (rel[:, 0] + LEVER_EPS))
+
+
 def delta_angle(*, force_delta: np.ndarray, torque_delta: np.ndarray) -> np.ndarray:
     """
     Direction of a load change in the (force, torque) plane: ``atan2(dT, dF)``.

@@ -28,11 +28,11 @@ from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
 from contact_detector.features.carried import CarriedLoad, measure_carried_load
-from contact_detector.features.config import (CARRIED_FEATURES, CHANGE_FEATURES,
+from contact_detector.features.config import (CARRIED_DERIVED, CARRIED_FEATURES, CHANGE_FEATURES,
                                               DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
                                               PAPER_FEATURES, SHIFT_FEATURES)
-from contact_detector.features.deltas import (relative_to_carried, vector_shift, window_mean,
-                                              window_median, with_angle)
+from contact_detector.features.deltas import (carried_lever, relative_to_carried, vector_shift,
+                                              window_mean, window_median, with_angle)
 from contact_detector.features.frames import TimeJumpError
 from contact_detector.features.resample import WrenchResampler
 import numpy as np
@@ -82,10 +82,11 @@ class ForceTorqueStream:
         # the *_hold features hold both the changes and the shifts; the carried-load features
         # compare the vector change with the load measured over the first carried_window
         # samples, which every frame after a start must have
-        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(CARRIED_FEATURES)
+        carried = set(CARRIED_FEATURES) | set(CARRIED_DERIVED)
+        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried
         if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
-        self._want_carried = bool(set(self.use_delta) & set(CARRIED_FEATURES))
+        self._want_carried = bool(set(self.use_delta) & carried)
         #: Whether the features use the carried load (then it is measured, else never).
         self.uses_carried = self._want_carried
         if self._want_carried:
@@ -390,6 +391,7 @@ class ForceTorqueStream:
                                                    floor=self._floor)
                     derived['force_shift_rel'], derived['torque_shift_rel'] = rel.T
                     derived['force_carried_cos'], derived['torque_carried_cos'] = cos.T
+                    derived['ft_carried_lever'] = carried_lever(rel=rel)
                 low, high = self._shift_extremes(shift)
                 derived['force_shift'], derived['torque_shift'] = shift.T
                 derived['force_shift_min'], derived['torque_shift_min'] = low.T

@@ -761,3 +761,25 @@ def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
     rows = [[c.strip() for c in line.strip('|').split('|')]
             for line in family_part.splitlines() if line.startswith('| shipped')]
     assert rows and all(r[3].startswith('0/') and r[4].split()[0] == '0' for r in rows)
+
+
+def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data, tmp_path,
+                                                                            capsys):
+    bags = str(data['bags'])
+    families = sorted({t.condition for t in data['trials'].values()})
+    assert len(families) >= 2
+    out = tmp_path / 'lofo.md'
+    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped,previous', '--trees',
+                           '2', '--jobs', '1', '--lofo-families', families[0],
+                           '--out', str(out)]) == 0
+    text = out.read_text()
+    assert f'Left out: only {families[0]} (a screen' in text
+    family_part = text.split('## Every family')[1]
+    for setting in ('shipped', 'previous'):
+        rows = [[c.strip() for c in line.strip('|').split('|')]
+                for line in family_part.splitlines() if line.startswith(f'| {setting} |')]
+        assert rows and {r[2] for r in rows} == {families[0]}
+    with pytest.raises(SystemExit):
+        sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
+                        '--jobs', '1', '--lofo-families', 'no_such_family'])
+    assert "no trials of the families ['no_such_family']" in capsys.readouterr().err

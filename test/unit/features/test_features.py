@@ -22,7 +22,7 @@ from contact_detector.features import (FeatureConfig, FeatureFrames, StreamingFe
 from contact_detector.features import spectral
 from contact_detector.features.batch import batch_features
 from contact_detector.features.buffers import column_windows, running_max
-from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES
+from contact_detector.features.config import CARRIED_DERIVED, CARRIED_FEATURES, EXTRA_FEATURES
 from contact_detector.features.deltas import window_median
 from contact_detector.features.force_torque import ForceTorqueStream
 from hypothesis import given, settings, strategies as st
@@ -340,6 +340,53 @@ def test_carried_features_relate_the_change_to_the_carried_load_in_any_sensor_fr
             np.testing.assert_allclose(got[k], ref[k], atol=1e-9)
 
 
+def _lever_features(force, torque):
+    """``force_carried_cos`` and ``ft_carried_lever`` per frame (keyed by sample index)."""
+    config = FeatureConfig(extra_features=CARRIED_FEATURES + CARRIED_DERIVED, delta_window=1)
+    stream = ForceTorqueStream(config=config, input_rate=100.0)
+    ft, x = stream.push(t=T0 + np.arange(force.shape[0]) / 100, force=force, torque=torque)
+    keys = np.round((ft - T0) * 100).astype(int).tolist()
+    return dict(zip(keys, x[:, -3].tolist())), dict(zip(keys, x[:, -1].tolist()))
+
+
+def test_carried_lever_tells_a_brush_from_the_table_taking_the_weight():
+    # 6 N carried along -x (gravity), its centre of mass 0.15 m along z: 0.9 N m. The table
+    # takes 4 N off under the centre of mass (on the line of the weight, 0.1 m further
+    # along -x): force and torque fall by the same share (2/3), lever 0. A brush 5 cm from the
+    # sensor pushes up (+x, against the weight, like the table) with a sideways part (+y) and
+    # a stick-slip fluctuation: the torque changes by a far smaller share than the force.
+    # The carried cosine calls both a load taken off (< -0.8); the lever does not.
+    n, weight_at = 140, np.array([0.0, 0.0, 0.15])
+    force, torque = _carried_load(n)
+    table = force.copy()
+    table[80:, 0] += np.minimum(np.arange(n - 80) / 3, 1.0) * 4.0
+    table_torque = torque + np.cross(weight_at + [-0.1, 0.0, 0.0], table - force)
+    rng = np.random.default_rng(3)
+    slip = np.clip(1 + 0.35 * rng.standard_normal(n - 80), 0.0, None)
+    push = np.zeros((n, 3))
+    push[80:] = np.outer(np.minimum(np.arange(n - 80) / 3, 1.0) * slip, [1.5, 1.0, 0.0])
+    brush_torque = torque + np.cross([0.0, 0.0, 0.05], push)
+    cos_t, lever_t = _lever_features(table, table_torque)
+    cos_b, lever_b = _lever_features(force + push, brush_torque)
+    assert lever_t[79] == 0.0 and lever_b[79] == 0.0        # nothing changed: ln(e / e)
+    for k in range(84, 100):                                 # 40-200 ms into either
+        assert lever_t[k] == pytest.approx(0.0, abs=1e-9)
+        assert cos_t[k] == pytest.approx(-1.0)
+        assert cos_b[k] < -0.8
+        assert lever_b[k] < -0.7
+    # the brush's share of force and torque, whatever its fluctuation: 0.3 and 0.1 of the load
+    steady = np.ones(n - 80)
+    push[80:] = np.outer(np.minimum(np.arange(n - 80) / 3, 1.0) * steady, [1.5, 1.0, 0.0])
+    _, lever = _lever_features(force + push, torque + np.cross([0.0, 0.0, 0.05], push))
+    share_f, share_t = np.hypot(1.5, 1.0) / 6.0, np.hypot(0.075, 0.05) / 0.9
+    assert lever[90] == pytest.approx(np.log((share_t + 0.02) / (share_f + 0.02)))
+    # lengths and shares do not change when the sensor frame rotates
+    rot = _random_rotation(5)
+    _, rotated = _lever_features((force + push) @ rot.T,
+                                 (torque + np.cross([0.0, 0.0, 0.05], push)) @ rot.T)
+    assert all(rotated[k] == pytest.approx(lever[k], abs=1e-9) for k in lever)
+
+
 def test_carried_features_on_a_tared_sensor_fall_back_to_the_floor():
     # the same unloading seen by a tared sensor (the carried load subtracted): nothing to
     # compare with, so the ratio is the shift in units of the floor and the cosine is 0
@@ -475,6 +522,7 @@ configs = st.builds(
         ('torque_change_max',), ('force_change_max', 'force_delta', 'torque_change'),
         ('force_shift', 'torque_shift_min'), ('torque_shift', 'force_shift_max', 'force_delta'),
         ('force_carried_cos', 'torque_shift_rel'), ('force_shift_rel', 'torque_carried_cos'),
+        ('ft_carried_lever',), ('force_shift', 'ft_carried_lever', 'torque_carried_cos'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
