@@ -286,7 +286,7 @@ class ContactDetector:
     @property
     def carried_load(self) -> Optional[CarriedLoad]:
         """
-        The last completed carried-load measurement, or None.
+        Return the last completed carried-load measurement, or None.
 
         None before the first ``carried_window`` F/T samples after a start, a reset or an
         arming, and always when the model has no carried-load feature. A new object per

@@ -112,7 +112,7 @@ class AudioFallback:
 
     @property
     def carried_load(self) -> Optional[CarriedLoad]:
-        """The multimodal model's carried-load measurement, else the F/T-only model's."""
+        """Return the multimodal model's carried-load measurement, else the F/T-only model's."""
         primary = self.primary.carried_load
         return primary if primary is not None else self.fallback.carried_load
 
