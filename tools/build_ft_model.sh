@@ -3,14 +3,18 @@
 # simulated trials over all twelve condition sets ('wide', seed 11, 40 per set); simulated into
 # DIR (default data/train_wide) unless DIR already holds those trials (its manifest says seed
 # 11, 480 trials, 'wide'). Recipe, chosen by leaving each simulator family out
-# (contact-detector sweep --lofo --lofo-settings ft-only+signed --lofo-label-start 0.03,
-# docs/offline.md "Robots without a microphone"): train --no-audio with the six spectral F/T
-# features, the six vector-shift features and the four signed change features of the
-# multimodal model (force_change, torque_change, *_change_max: a knock on the hand pushes the
-# load up before it rebounds, a touch unloads without that push); contact labels from 30 ms
-# after the onset (the first instants of a touch look like a knock to F/T alone); release at
-# the first frame with p >= 0.95 or when the mean P(contact) of the last 15 frames reaches 0.4
-# (the rule with the fewest premature releases in the worst left-out family, exogenous).
+# (contact-detector sweep --lofo --lofo-settings ft-only+signed,ft-only+signed+carried
+# --lofo-label-start 0.03, docs/offline.md "Robots without a microphone") and fresh trials:
+# train --no-audio with the six spectral F/T features, the six vector-shift features, the four
+# signed change features of the multimodal model (force_change, torque_change, *_change_max: a
+# knock on the hand pushes the load up before it rebounds, a touch unloads without that push)
+# and its four carried-load features (force_shift_rel, torque_shift_rel, *_carried_cos: the
+# change against the load carried at the start or arming, which a knock on the hand does not
+# take off and a table does); contact labels from 30 ms after the onset (the first instants
+# of a touch look like a knock to F/T alone); release at the first frame with p >= 0.95 or
+# when the mean P(contact) of the last 15 frames reaches 0.4 (the rule with the fewest
+# premature releases in the worst left-out family, exogenous). Arm the node while the hand
+# holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
 set -euo pipefail
@@ -33,7 +37,7 @@ then
     --overwrite --quiet
 fi
 .venv/bin/contact-detector train "$data" --no-audio \
-  --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max \
+  --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max,force_shift_rel,torque_shift_rel,force_carried_cos,torque_carried_cos \
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

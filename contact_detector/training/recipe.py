@@ -31,7 +31,8 @@ from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import score_onsets, score_trial, summarize, Truth
-from contact_detector.features.config import FEATURE_SCHEMA_VERSION, FeatureConfig, SHIFT_FEATURES
+from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
+                                              FeatureConfig, SHIFT_FEATURES)
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
@@ -57,10 +58,12 @@ MIN_RECORDINGS = 3
 DEFAULT_FEATURES = FeatureConfig.shipped()
 #: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
 #: do not depend on the sensor's orientation, tare or sign convention, and the signed changes
-#: of |F| and |T| with their recent maxima, which tell a knock on the hand from a touch
-#: (chosen by leaving each family out: docs/offline.md, "Robots without a microphone").
+#: of |F| and |T| with their recent maxima, which tell a knock on the hand from a touch, and
+#: the change against the load carried at the start or arming, which a knock on the hand does
+#: not take off and a table does (chosen by leaving each family out and on fresh trials:
+#: docs/offline.md, "Robots without a microphone").
 DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES + ('force_change', 'torque_change', 'force_change_max',
-                                          'torque_change_max')
+                                          'torque_change_max') + CARRIED_FEATURES
 #: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
 NO_AUDIO_RATE = 16000
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)

@@ -28,7 +28,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.metrics import premature_text, summarize
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
@@ -71,6 +71,9 @@ LOFO_SETTINGS = {
     'ft-only': _SPECTRAL + _SHIFT,
     'ft-only+signed': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+hold': _SPECTRAL + _SHIFT + _SIGNED + _HOLD,
+    # the carried-load features of the multimodal model: a knock on the hand does not take
+    # the carried load off, a table does
+    'ft-only+signed+carried': _SPECTRAL + _SHIFT + _SIGNED + CARRIED_FEATURES,
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,

@@ -660,8 +660,8 @@ def test_sweep_lofo_scores_each_family_plain_and_augmented(data, tmp_path):
 def test_sweep_lofo_scores_the_knocked_trials_and_a_shorter_maximum_window(data, tmp_path):
     out = tmp_path / 'lofo.md'
     assert sweep_cli.main([str(data['bags']), '--lofo', '--lofo-settings',
-                           'ft-only+signed,ft-only+signed+max20', '--trees', '2', '--jobs',
-                           '1', '--out', str(out)]) == 0
+                           'ft-only+signed,ft-only+signed+max20,ft-only+signed+carried',
+                           '--trees', '2', '--jobs', '1', '--out', str(out)]) == 0
     manifest = json.loads((data['bags'] / 'manifest.json').read_text())
     knocked = sum(any(i['kind'] == 'hand' and i['in_air'] for i in t['impacts'])
                   for t in manifest['trials'])
@@ -669,7 +669,8 @@ def test_sweep_lofo_scores_the_knocked_trials_and_a_shorter_maximum_window(data,
     rows = [[c.strip() for c in line.strip('|').split('|')]
             for line in out.read_text().split('## Every family')[0].splitlines()
             if line.startswith('| ft-only')]
-    assert {r[0] for r in rows} == {'ft-only+signed', 'ft-only+signed+max20'}
+    assert {r[0] for r in rows} == {'ft-only+signed', 'ft-only+signed+max20',
+                                    'ft-only+signed+carried'}
     for r in rows:
         # the last column: the knocked trials of every family, each scored while left out
         detected, early, _ = (v.strip() for v in r[8].split(' / '))

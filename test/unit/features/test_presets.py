@@ -14,11 +14,12 @@
 
 """The named feature presets, the shipped models' location without ROS, and train's defaults."""
 
-from contact_detector.features.config import FeatureConfig, PAPER_FEATURES
+from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, PAPER_FEATURES
 from contact_detector.model.shipped import default_ft_model_path, default_model_path, model_dirs
 from contact_detector.model.storage import load_bundle
 from contact_detector.ros.model_search import node_model_dirs
-from contact_detector.training.recipe import DEFAULT_FEATURES
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA
+from contact_detector.training.studies import LOFO_SETTINGS
 
 
 def test_shipped_preset_is_the_shipped_models_configuration() -> None:
@@ -41,3 +42,12 @@ def test_shipped_models_are_found_without_ros_and_the_node_searches_the_same_pla
     assert node_model_dirs()[-len(model_dirs()):] == model_dirs()
     assert not load_bundle(path=default_model_path()).feature_config.ft_only
     assert load_bundle(path=default_ft_model_path()).feature_config.ft_only
+
+
+def test_shipped_ft_model_has_the_columns_it_was_chosen_with_and_trains_defaults() -> None:
+    # docs/offline.md: chosen as sweep --lofo's ft-only+signed+carried; train --no-audio
+    # rebuilds the same columns without --extra-features
+    config = load_bundle(path=default_ft_model_path()).feature_config
+    assert set(config.feature_names) == set(LOFO_SETTINGS['ft-only+signed+carried'])
+    assert config.extra_features == DEFAULT_FT_ONLY_EXTRA
+    assert set(CARRIED_FEATURES) <= set(config.feature_names)
