@@ -109,7 +109,12 @@ which must decide causally, this sees the whole recording and works in three ste
    times the floor, +5 dB) from ``audio_slow_lo_s`` before the F/T onset up to it sets the time
    when no sound was found; one after the F/T onset adds nothing (a dull thud crosses the level
    late), and after a fast or busy rise a faint sound is more likely something else (a knock,
-   noise).
+   noise). A contact's load grows at most like the square of the time since the touch (the
+   lagged spring of the simulator between ``s`` and ``s^2``, a Hertzian or conical contact like
+   ``s^1.5`` or ``s^2``), so a sound is dropped when the rise from sample ``m`` over the next
+   ``growth_s`` climbs faster than a start at the sound allows (:func:`rise_fits_start`, power
+   ``growth_power``, ``growth_margin`` sigma of noise allowed): a clatter tens of ms before a
+   rise that leaves the noise steeply is not the contact's.
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
@@ -238,6 +243,14 @@ class LabelSettings:
     whiten_s : float
         Length of the baseline before the pre-event window's end whose covariance whitens it
         (at least one period of the slowest slosh, 1.5 Hz).
+    growth_power : float
+        A contact's load grows at most like this power of the time since the touch; a sound
+        before which the rise would have to grow faster is not the contact's.
+    growth_margin : float
+        Noise allowance of that test in robust standard deviations of ``y``.
+    growth_s : float
+        The test checks the samples after ``m`` up to where ``y`` reaches ``fit_frac`` of
+        the change or the fast-rise level, whichever is later, at most this long after ``m``.
 
     """
 
@@ -284,6 +297,9 @@ class LabelSettings:
     whiten_sigma: float = 3.0
     moved_back_samples: float = 1.0
     whiten_s: float = 1.0
+    growth_power: float = 2.0
+    growth_margin: float = 2.0
+    growth_s: float = 0.1
 
 
 @dataclass
@@ -427,6 +443,54 @@ def cusum_start(*, z: np.ndarray, start: int, alarm_from: int, kappa: float,
         elif j >= alarm_from and acc > h:
             return last_zero + 1
     return None
+
+
+def rise_fits_start(*, t: np.ndarray, y: np.ndarray, sd: float, m: int, end: int,
+                    start: float, power: float, margin: float) -> bool:
+    r"""
+    Whether the rise of ``y`` from sample ``m`` to ``end`` can have started at ``start`` (s).
+
+    A contact's load grows at most like a power of the time since the touch: the
+    simulator's lagged spring ``k v s (1 - exp(-s / lag))`` grows between ``s`` and
+    ``s^2``, a Hertzian or conical contact like ``s^1.5`` or ``s^2``, and a slowing hand only
+    less. Sample ``j`` averages the load over ``(t_j - dt, t_j]`` and the load rises, so
+    ``y_m >= f(t_m - dt)`` and ``y_j <= f(t_j)``; with ``f(s) <= f(s_1) (s / s_1)^power``
+    for ``s >= s_1``, a start at ``start`` allows at most
+
+    .. math:: y_j \le (y_m + \text{margin}\,\sigma)
+              \left(\frac{t_j - start}{t_m - dt - start}\right)^{power} + \text{margin}\,\sigma
+
+    A rise that climbs faster than that started later (a sound tens of ms before a rise that
+    leaves the noise steeply is not the contact's).
+
+    Parameters
+    ----------
+    t, y : np.ndarray, shape (n,)
+        Sample times (s) and the load change along the change direction.
+    sd : float
+        Robust standard deviation of ``y`` in the baseline.
+    m, end : int
+        First sample out of the baseline band and the last sample checked.
+    start : float
+        Candidate onset, s.
+    power : float
+        Largest growth exponent of a contact's load.
+    margin : float
+        Noise allowance in units of ``sd``.
+
+    Returns
+    -------
+    bool
+        False when some sample climbs faster than a start at ``start`` allows.
+
+    """
+    dt = float(t[m] - t[m - 1]) if m >= 1 else 0.0
+    span = float(t[m]) - dt - start
+    if span <= 0 or end <= m:
+        return True
+    j = np.arange(m + 1, min(end, len(y) - 1) + 1)
+    cap = (max(float(y[m]), 0.0) + margin * sd) * ((t[j] - start) / span) ** power
+    return not bool(np.any(y[j] > cap + margin * sd))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -738,6 +802,10 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
                 settings=dataclasses.replace(s, audio_lo_s=s.audio_hi_s,
                                              audio_hi_s=s.audio_strong_hi_s,
                                              audio_rise=s.audio_strong))
+        if a_on is not None and not rise_fits_start(
+                t=t, y=y, sd=sd, m=m, end=min(max(r, e), m + int(round(s.growth_s / dt))),
+                start=a_on, power=s.growth_power, margin=s.growth_margin):
+            a_on = None
         if a_on is not None:
             onset, source = a_on, 'audio'
         else:

@@ -25,7 +25,8 @@ axis. The load acts along -z with a lever arm, so force and torque change togeth
 is white noise at 16 kHz with, where a test adds one, a faint click (a decaying noise burst).
 """
 
-from contact_detector.evaluation.labelling import cusum_start, propose_onset, whitened_direction
+from contact_detector.evaluation.labelling import (cusum_start, propose_onset, rise_fits_start,
+                                                   whitened_direction)
 import numpy as np
 import pytest
 
@@ -286,3 +287,31 @@ def test_a_rise_the_cusum_moved_back_is_not_extrapolated_two_more_samples():
                                           delay=delay), seed=3)
     p = propose_onset(ft_t=t, force=force, torque=torque)
     assert abs(p.onset_t - ONSET - delay) <= 0.020, (p.onset_t - ONSET - delay) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 1, 2])
+def test_a_sound_long_before_a_steep_rise_is_not_the_contact(seed):
+    # an impact bump (5 sigma in its sample) and a lagged ramp (80 N/s, lag 30 ms) that then
+    # climbs 5-10 sigma per sample: a slow rise by the fast-rise test, whose sound is looked
+    # for from 80 ms before. A clatter of the kitchen 60 ms before the contact, which itself
+    # makes no sound, was taken (60 ms early); a load that grows at most like the square of
+    # the time since the touch cannot have started there, so the F/T onset stands
+    t, force, torque = _wrench(_bump_then(peak=2.5, width=0.003, slope=80.0, lag=0.03,
+                                          top=8.0), seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET - 0.06, 200.0, 0.005),))
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'ft'
+    assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+
+
+def test_rise_fits_start_rejects_a_start_too_early_for_the_growth():
+    # y = 100 (s - 0.5)^2 from 0.5 s sampled at 100 Hz: a start at 0.5 s fits, one at 0.4 s
+    # cannot (from 0.4 s, the later samples grow faster than the square of the time)
+    t = np.arange(100) * DT
+    y = 1000.0 * np.maximum(t - 0.5, 0.0) ** 2
+    m = int(np.nonzero(y > 3.5)[0][0])
+    assert rise_fits_start(t=t, y=y, sd=1.0, m=m, end=m + 10, start=0.5, power=2.0,
+                           margin=2.0)
+    assert not rise_fits_start(t=t, y=y, sd=1.0, m=m, end=m + 10, start=0.4, power=2.0,
+                               margin=2.0)
