@@ -92,7 +92,7 @@ def window_median(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.nd
     return middle.T
 
 
-def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
+def vector_shift(*, change: np.ndarray) -> np.ndarray:
     """
     Length of the change of the force and of the torque vector: ``|recent - baseline|``.
 
@@ -102,9 +102,10 @@ def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    recent, baseline : np.ndarray, shape (m, 6)
-        Force x, y, z in N then torque x, y, z in N m: the newest samples' mean and the
-        baseline's per-axis median (:func:`window_mean`, :func:`window_median`).
+    change : np.ndarray, shape (m, 6)
+        ``recent - baseline``, force x, y, z in N then torque x, y, z in N m: the newest
+        samples' mean minus the baseline's per-axis median (:func:`window_mean`,
+        :func:`window_median`). The caller keeps it for :func:`relative_to_carried`.
 
     Returns
     -------
@@ -112,7 +113,6 @@ def vector_shift(*, recent: np.ndarray, baseline: np.ndarray) -> np.ndarray:
         ``force_shift`` in N and ``torque_shift`` in N m, >= 0 (0 when nothing changed).
 
     """
-    change = recent - baseline
     return np.stack([np.linalg.norm(change[:, :3], axis=1),
                      np.linalg.norm(change[:, 3:], axis=1)], axis=1)
 

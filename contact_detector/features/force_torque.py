@@ -384,9 +384,10 @@ class ForceTorqueStream:
                 recent_v = window_mean(signal=vecs, ends=ends, window=cfg.delta_window)
                 base_v = window_median(signal=vecs, ends=ends - cfg.shift_lag,
                                        window=cfg.shift_window)
-                shift = vector_shift(recent=recent_v, baseline=base_v)
+                change_v = recent_v - base_v
+                shift = vector_shift(change=change_v)
                 if self._want_carried:
-                    rel, cos = relative_to_carried(change=recent_v - base_v, shift=shift,
+                    rel, cos = relative_to_carried(change=change_v, shift=shift,
                                                    carried=self._carried_per_frame(ends),
                                                    floor=self._floor)
                     derived['force_shift_rel'], derived['torque_shift_rel'] = rel.T
