@@ -86,10 +86,9 @@ class ForceTorqueStream:
         vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried
         if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
-        self._want_carried = bool(set(self.use_delta) & carried)
         #: Whether the features use the carried load (then it is measured, else never).
-        self.uses_carried = self._want_carried
-        if self._want_carried:
+        self.uses_carried = bool(set(self.use_delta) & carried)
+        if self.uses_carried:
             need = max(need, config.carried_window)
         self.first_end = need - 1
         self.history = need
@@ -140,7 +139,7 @@ class ForceTorqueStream:
         window, not this: the object in the hand has not changed.
         """
         self._carried_rows.clear()
-        self._measuring = self._want_carried
+        self._measuring = self.uses_carried
 
     def _restart(self) -> None:
         # Forget the window, previous spectra and partial block; keep the last stamp.
@@ -386,7 +385,7 @@ class ForceTorqueStream:
                                        window=cfg.shift_window)
                 change_v = recent_v - base_v
                 shift = vector_shift(change=change_v)
-                if self._want_carried:
+                if self.uses_carried:
                     rel, cos = relative_to_carried(change=change_v, shift=shift,
                                                    carried=self._carried_per_frame(ends),
                                                    floor=self._floor)
