@@ -97,8 +97,13 @@ which must decide causally, this sees the whole recording and works in three ste
    knock or a transient of the room. A contact sound and its force change start at the same
    instant, so after a *sharp departure* (sample ``m`` at ``sharp_k`` sigma or more, the two before
    it within ``sharp_prev`` sigma: the contact is inside sample ``m``'s period or the one before)
-   the window starts no earlier than ``t_m - sharp_back dt``. After a slow or busy rise (step 2's
-   hinge fits), which are found late rather than early, the window starts at ``audio_slow_lo_s``;
+   the window starts no earlier than ``t_m - sharp_back dt``; after a *jump* (step 2), whose
+   contact is in sample ``m``'s period or the one before, no sound starting before
+   ``t_m - jump_back dt`` is the contact. Both bounds hold for the sound's onset itself: it is
+   refined into the frame before the window's first loud frame, so a knock that starts just
+   before the bound and rings into the window would otherwise be taken. After a slow or busy
+   rise (step 2's hinge fits), which are found late rather than early, the window starts at
+   ``audio_slow_lo_s``;
    after a fast rise (F/T onset good to a sample) at ``max(audio_lo_s, -2 dt)``. Without a sound in
    that window, a strong one (``audio_strong`` times the floor, +15 dB) in
    ``(t0 + audio_hi_s, t0 + audio_strong_hi_s]`` sets the time: the F/T then left its baseline
@@ -251,6 +256,9 @@ class LabelSettings:
     growth_s : float
         The test checks the samples after ``m`` up to where ``y`` reaches ``fit_frac`` of
         the change or the fast-rise level, whichever is later, at most this long after ``m``.
+    jump_back : float
+        After a jump no sound starting more than this many sample periods before ``t_m`` is
+        the contact (the contact is in sample ``m``'s period or the one before).
 
     """
 
@@ -300,6 +308,7 @@ class LabelSettings:
     growth_power: float = 2.0
     growth_margin: float = 2.0
     growth_s: float = 0.1
+    jump_back: float = 2.0
 
 
 @dataclass
@@ -805,6 +814,13 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         if a_on is not None and not rise_fits_start(
                 t=t, y=y, sd=sd, m=m, end=min(max(r, e), m + int(round(s.growth_s / dt))),
                 start=a_on, power=s.growth_power, margin=s.growth_margin):
+            a_on = None
+        # the departure's bound holds for the sound's onset, not only for the window: the
+        # onset is refined into the frame before the window's first hot frame, which may
+        # start before the bound
+        if a_on is not None and (
+                (sharp and a_on < float(t[m]) - s.sharp_back * dt)
+                or (jump and a_on < float(t[m]) - s.jump_back * dt)):
             a_on = None
         if a_on is not None:
             onset, source = a_on, 'audio'

@@ -186,6 +186,35 @@ def test_a_sound_well_before_a_sharp_departure_is_not_the_contact(seed):
     assert 0.0 <= p.onset_t - ONSET <= 0.005, (p.onset_t - ONSET) * 1e3
 
 
+# (bump peak N, ramp slope N/s, ramp lag s, start of a sound before the contact s): the
+# contact, 3.7 ms into the sample period ending at t_m, makes no sound; a knock starts just
+# before the bound of its departure and rings into the sound window, whose first hot frame
+# is after the bound, but the sound's onset is refined into the frame before it:
+# - a sharp departure (a 3 N impact, 8 sigma out of the noise, then a lagged 40 N/s ramp, a
+#   slow rise; with these seeds the two samples before it are within 2 sigma): no sound
+#   starts more than 3 sample periods before t_m; the knock 0.8 ms before that was taken,
+#   25 ms early;
+# - a jump (an 8 N impact and a 1000 N/s ramp, over 14 sigma out of the noise): the contact
+#   is in sample m's period or the one before; the knock 0.3 ms before that was taken, 20 ms
+#   early.
+EARLY_SOUNDS = [
+    pytest.param(seed, (3.0, 40.0, 0.03, 0.0255), id=f'sharp-departure-{seed}')
+    for seed in (0, 9)] + [
+    pytest.param(seed, (8.0, 1000.0, 0.0, 0.020), id=f'jump-{seed}') for seed in (0, 3)]
+
+
+@pytest.mark.parametrize('seed, shape', EARLY_SOUNDS)
+def test_a_sound_starting_before_its_departures_bound_is_not_the_contact(seed, shape):
+    peak, slope, lag, before = shape
+    t, force, torque = _wrench(_bump_then(peak=peak, width=0.003, slope=slope, lag=lag,
+                                          top=8.0), seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET - before, 200.0, 0.005),))
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'ft'
+    assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
+
+
 @pytest.mark.parametrize('seed', [0, 1])
 def test_the_dominant_sound_is_the_contact_not_a_faint_one_before_it(seed):
     # a slow transfer's sound window opens 80 ms before its F/T onset: a click 10 times the
