@@ -15,9 +15,10 @@
 """
 Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
-Also: sounds before a sharp F/T departure, the dominant sound in the window, the onset of a
-gradual soft rise inside its first sample and of a rise that steps out of the noise, a rise
-the CUSUM moved back, and a baseline busy with liquid slosh.
+Also: sounds before a sharp F/T departure or a jump, a late thud that agrees with a slow
+rise's hinge, the dominant sound in the window, the onset of a gradual soft rise inside its
+first sample and of a rise that steps out of the noise, a rise the CUSUM moved back, and a
+baseline busy with liquid slosh.
 
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
@@ -213,6 +214,21 @@ def test_a_sound_starting_before_its_departures_bound_is_not_the_contact(seed, s
                       audio_t0=0.0)
     assert p.source == 'ft'
     assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
+
+
+@pytest.mark.parametrize('seed', [0, 2, 4])
+def test_a_late_thud_and_a_slow_hinge_that_agree_give_their_mean(seed):
+    # a soft contact: a small bump, then a lagged 60 N/s ramp (a slow rise on a calm
+    # baseline) whose hinge is within 2 ms; its dull thud crosses the level 8 ms after the
+    # touch and set the onset 8 ms late. The hinge is less than 10 ms before the sound:
+    # both mark the touch, and their mean is 4-5 ms late
+    t, force, torque = _wrench(_bump_then(peak=0.5, width=0.02, slope=60.0, lag=0.05,
+                                          top=20.0), seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET + 0.008, 200.0, 0.01),))
+    p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
+                      audio_t0=0.0)
+    assert p.source == 'audio'
+    assert 0.0 <= p.onset_t - ONSET <= 0.005, (p.onset_t - ONSET) * 1e3
 
 
 @pytest.mark.parametrize('seed', [0, 1])
