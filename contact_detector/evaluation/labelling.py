@@ -121,10 +121,12 @@ which must decide causally, this sees the whole recording and works in three ste
    ``growth_power``, ``growth_margin`` sigma of noise allowed): a clatter tens of ms before a
    rise that leaves the noise steeply is not the contact's.
    A sound's onset is late by its travel to the microphone (1-4 ms at 0.3-1.2 m) and, for a
-   dull thud, by the frames it takes to build up over the level; the hinge of a slow rise on a
-   calm baseline has no such lag, only the noise of a few samples. When that hinge is at most
-   ``agree_s`` before the sound both mark the same touch, and the onset is their mean (a
-   hinge earlier than that, or after the sound, is the hinge's error: the sound stands).
+   dull thud, by the frames it takes to build up over the level; the hinge of a slow or a
+   gradual rise on a calm baseline (step 2) has no such lag, only the noise of a few samples.
+   When that hinge is at most ``agree_s`` before the sound both mark the same touch, and the
+   onset is their mean (a hinge earlier than that, or after the sound, is the hinge's error:
+   the sound stands; a stiff contact's F/T onset, the middle of a sample, is coarser than its
+   sound).
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
 how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
@@ -265,8 +267,8 @@ class LabelSettings:
         After a jump no sound starting more than this many sample periods before ``t_m`` is
         the contact (the contact is in sample ``m``'s period or the one before).
     agree_s : float
-        When the hinge of a slow rise on a calm baseline is at most this long before the
-        sound's onset, the onset is their mean.
+        When the hinge of a slow or gradual rise on a calm baseline is at most this long
+        before the sound's onset, the onset is their mean.
 
     """
 
@@ -750,6 +752,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # fast rise: the onset is within the averaging period of sample n0 (its middle); slow
     # rise: a hinge fit up to where y reaches rise_k * k_sigma extrapolates back
     ft_onset = float(t[n0]) - 0.5 * dt
+    gradual = False
     if sd > s.busy_sigma:
         # a busy baseline (ripple, slosh: many times the sensor noise): the k_sigma search
         # is late by up to the oscillation's size; a ramp fitted through it averages it out
@@ -785,7 +788,8 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
         # takes gradual_s or longer) starts anywhere in sample n0's averaging period: the
         # hinge through its first samples places it (a stiff contact's impact keeps the middle)
         quarter = np.nonzero(y[m:b] >= 0.25 * float(np.linalg.norm(change)))[0]
-        if len(quarter) and int(quarter[0]) >= round(s.gradual_s / dt):
+        gradual = bool(len(quarter) and int(quarter[0]) >= round(s.gradual_s / dt))
+        if gradual:
             k_start = max(0, n0 - max(12, int(round(s.fit_pre_s / dt))))
             k_end = min(len(y) - 1, m + 2)
             ft_onset = hinge_fit(t=t[k_start:k_end + 1], y=y[k_start:k_end + 1], dt=dt,
@@ -833,9 +837,10 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
             a_on = None
         if a_on is not None:
             onset, source = a_on, 'audio'
-            if slow and sd <= s.busy_sigma and 0.0 < a_on - ft_onset <= s.agree_s:
-                # the sound is late by its travel and build-up, the slow hinge only noisy:
-                # when they agree within agree_s, both mark the touch
+            if ((slow or gradual) and sd <= s.busy_sigma
+                    and 0.0 < a_on - ft_onset <= s.agree_s):
+                # the sound is late by its travel and build-up, the hinge of a slow or
+                # gradual rise only noisy: when they agree within agree_s, both mark the touch
                 onset = 0.5 * (a_on + ft_onset)
         else:
             confidence *= 0.8

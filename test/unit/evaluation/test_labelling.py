@@ -15,10 +15,10 @@
 """
 Hindsight labelling on synthetic F/T and audio: slow rises, noise before a contact, faint clicks.
 
-Also: sounds before a sharp F/T departure or a jump, a late thud that agrees with a slow
-rise's hinge, the dominant sound in the window, the onset of a gradual soft rise inside its
-first sample and of a rise that steps out of the noise, a rise the CUSUM moved back, and a
-baseline busy with liquid slosh.
+Also: sounds before a sharp F/T departure or a jump, a late thud that agrees with the hinge
+of a slow or gradual rise, the dominant sound in the window, the onset of a gradual soft rise
+inside its first sample and of a rise that steps out of the noise, a rise the CUSUM moved
+back, and a baseline busy with liquid slosh.
 
 The wrench is built at 20 times the sensor rate and averaged over each 10 ms sample period (as
 the sensor's ADC does), then white noise is added: 0.15 N per force axis, 6 mN m per torque
@@ -216,19 +216,30 @@ def test_a_sound_starting_before_its_departures_bound_is_not_the_contact(seed, s
     assert abs(p.onset_t - ONSET) <= 0.010, (p.onset_t - ONSET) * 1e3
 
 
-@pytest.mark.parametrize('seed', [0, 2, 4])
-def test_a_late_thud_and_a_slow_hinge_that_agree_give_their_mean(seed):
-    # a soft contact: a small bump, then a lagged 60 N/s ramp (a slow rise on a calm
-    # baseline) whose hinge is within 2 ms; its dull thud crosses the level 8 ms after the
-    # touch and set the onset 8 ms late. The hinge is less than 10 ms before the sound:
-    # both mark the touch, and their mean is 4-5 ms late
-    t, force, torque = _wrench(_bump_then(peak=0.5, width=0.02, slope=60.0, lag=0.05,
-                                          top=20.0), seed=seed)
-    audio = _sounds(seed=seed, events=((ONSET + 0.008, 200.0, 0.01),))
+# (bump peak N, bump width s, ramp slope N/s, lag s, top N, contact's delay s) of a soft
+# contact whose dull thud crosses the level 8 ms after the touch (it set the onset 8 ms late)
+# and whose F/T hinge is less than 10 ms before it: both mark the touch, their mean is 3-5 ms
+# late.
+# - a small bump, then a lagged 60 N/s ramp: a slow rise on a calm baseline, hinge within 2 ms;
+# - a soft surface (a bump, then a lagged ramp to 40 N, a quarter of the change after more
+#   than 60 ms): a gradual fast rise, hinge within 1 ms.
+AGREEING_THUDS = [
+    pytest.param(seed, (0.5, 0.02, 60.0, 0.05, 20.0, 0.0), id=f'slow-rise-{seed}')
+    for seed in (0, 2, 4)] + [
+    pytest.param(seed, (1.5, 0.03, 60.0, 0.08, 40.0, 0.0068), id=f'gradual-rise-{seed}')
+    for seed in (0, 1, 4)]
+
+
+@pytest.mark.parametrize('seed, shape', AGREEING_THUDS)
+def test_a_late_thud_and_a_hinge_that_agree_give_their_mean(seed, shape):
+    peak, width, slope, lag, top, delay = shape
+    t, force, torque = _wrench(_bump_then(peak=peak, width=width, slope=slope, lag=lag,
+                                          top=top, delay=delay), seed=seed)
+    audio = _sounds(seed=seed, events=((ONSET + delay + 0.008, 200.0, 0.01),))
     p = propose_onset(ft_t=t, force=force, torque=torque, audio=audio, audio_rate=AUDIO_RATE,
                       audio_t0=0.0)
     assert p.source == 'audio'
-    assert 0.0 <= p.onset_t - ONSET <= 0.005, (p.onset_t - ONSET) * 1e3
+    assert 0.0 <= p.onset_t - ONSET - delay <= 0.005, (p.onset_t - ONSET - delay) * 1e3
 
 
 @pytest.mark.parametrize('seed', [0, 1])
