@@ -13,8 +13,10 @@
 # take off and a table does); contact labels from 30 ms after the onset (the first instants
 # of a touch look like a knock to F/T alone); release at the first frame with p >= 0.95 or
 # when the mean P(contact) of the last 15 frames reaches 0.4 (the rule with the fewest
-# premature releases in the worst left-out family, exogenous). Arm the node while the hand
-# holds the object still (docs/node.md).
+# premature releases in the worst left-out family, exogenous); the training wrenches
+# augmented (a tared sensor on half the trials, lever arms x1/3-x3: sweep --lofo's
+# ft-only+signed+carried+aug, docs/decisions/2026-11-24-ft-only-augmentation.md). Arm the
+# node while the hand holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
 set -euo pipefail
@@ -40,4 +42,5 @@ fi
   --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max,force_shift_rel,torque_shift_rel,force_carried_cos,torque_carried_cos \
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
+  --augment --augment-tare 0.5 --augment-torque 0.333,3 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

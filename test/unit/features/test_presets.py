@@ -18,6 +18,7 @@ from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, PA
 from contact_detector.model.shipped import default_ft_model_path, default_model_path, model_dirs
 from contact_detector.model.storage import load_bundle
 from contact_detector.ros.model_search import node_model_dirs
+from contact_detector.training.augmentation import WrenchAugmentation
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA
 from contact_detector.training.studies import LOFO_SETTINGS
 
@@ -51,3 +52,12 @@ def test_shipped_ft_model_has_the_columns_it_was_chosen_with_and_trains_defaults
     assert set(config.feature_names) == set(LOFO_SETTINGS['ft-only+signed+carried'])
     assert config.extra_features == DEFAULT_FT_ONLY_EXTRA
     assert set(CARRIED_FEATURES) <= set(config.feature_names)
+
+
+def test_shipped_ft_model_trained_on_the_augmented_wrenches_it_was_chosen_with() -> None:
+    # docs/decisions/2026-11-24-ft-only-augmentation.md: chosen as sweep --lofo's
+    # ft-only+signed+carried+aug with --augment-tare 0.5 --augment-torque 0.333,3
+    # (tools/build_ft_model.sh); the multimodal model trains on the wrenches as simulated
+    chosen = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
+    assert load_bundle(path=default_ft_model_path()).training['augmentation'] == chosen.to_dict()
+    assert load_bundle(path=default_model_path()).training['augmentation'] is None
