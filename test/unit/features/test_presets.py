@@ -61,3 +61,12 @@ def test_shipped_ft_model_trained_on_the_augmented_wrenches_it_was_chosen_with()
     chosen = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
     assert load_bundle(path=default_ft_model_path()).training['augmentation'] == chosen.to_dict()
     assert load_bundle(path=default_model_path()).training['augmentation'] is None
+
+
+def test_shipped_ft_model_releases_by_the_rule_it_was_chosen_with() -> None:
+    # docs/decisions/2026-11-24-ft-only-release-rule.md: p >= 0.95 or the mean of the last 15
+    # frames >= 0.4 (tools/build_ft_model.sh; p >= 0.9 released early more often on fresh
+    # trials); the multimodal model's slow path is 0.3
+    rule = load_bundle(path=default_ft_model_path()).decision_rule
+    assert rule.short() == 'p>=0.95 x1 or mean15>=0.4'
+    assert load_bundle(path=default_model_path()).decision_rule.sustain_threshold == 0.3
