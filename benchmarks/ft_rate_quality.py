@@ -31,7 +31,8 @@ For every rate R it runs the commands a user types (as ``python -m contact_detec
   from the stamps);
 - ``contact-detector sweep OUT_DIR/rR --model models/contact_forest_ft.npz --knocks
   --wrench-rate R --out OUT_DIR/sweep_rR.md`` (the F/T-only model's own rule on the trials
-  with a knock on the hand in the air; ``sweep`` takes the rate from ``--wrench-rate``);
+  with a knock on the hand in the air; ``sweep`` measures the rate as ``evaluate`` does,
+  ``--wrench-rate`` gives it the rate simulated all the same);
 
 and with ``--quiet-rates`` the multimodal model on ``--conditions quiet_contact`` trials
 (``OUT_DIR/qR``: a microphone that hears nothing of the contact).

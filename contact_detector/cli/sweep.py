@@ -51,11 +51,13 @@ from pathlib import Path
 import sys
 from typing import List, Optional, Sequence
 
+from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.cli.model_options import (add_augmentation_arguments,
                                                 augmentation_from_args)
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
+from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
@@ -89,9 +91,27 @@ def seed_list(text: str) -> List[int]:
     return seeds
 
 
-def decode(bags, spec, tag):
+def discover(folders: Sequence, args: argparse.Namespace) -> tuple[dict, float, float]:
+    """
+    Find every folder's bags and their streams (flags override); print one line per folder.
+
+    Returns ``({folder: {bag: Streams}}, audio_rate, wrench_rate)``, the rates shared by all
+    the bags (:func:`~contact_detector.io.discovery.common_rates`). ``folders`` holds folder
+    names, or ``(name, bags)`` for a chosen set of bags.
+    """
+    found = {}
+    for folder in folders:
+        name, bags = folder if isinstance(folder, tuple) else (folder, find_bags([folder]))
+        found[name] = dict(discover_all(bags, args=args, params={},
+                                        prog=f'contact-detector sweep: {name}'))
+    audio_rate, wrench_rate = common_rates([item for streams in found.values()
+                                            for item in streams.items()])
+    return found, audio_rate, wrench_rate
+
+
+def decode(found, tag):
     """Decode every bag once, with a progress bar: 'tag/name' -> (events, truth)."""
-    return decode_bags(bags=bags, spec=spec, tag=tag,
+    return decode_bags(bags=list(found), spec=StreamSpec(), found=found, tag=tag,
                        progress=lambda b: tqdm(b, desc=f'decode {tag}', unit='bag'))
 
 
@@ -142,17 +162,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--knocks', action='store_true',
                         help='--model: also score, per folder, the trials with a knock on the '
                              'hand while the object is in the air (simulator manifests)')
-    parser.add_argument('--audio-rate', type=float, default=16000.0)
-    parser.add_argument('--wrench-rate', type=float, default=100.0)
+    add_stream_arguments(parser)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
-    spec = StreamSpec()
     if (args.own_test is not None or args.knocks) and args.model is None:
         parser.error('--own-test and --knocks need --model')
     if args.model is not None:
         try:
-            output = with_model(args, spec)
+            output = with_model(args)
         except ContactDetectorError as err:
             print(f'contact-detector sweep: {err}', file=sys.stderr)
             return 1
@@ -164,11 +182,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         try:
             augmentation = augmentation_from_args(args)
             check_min_samples_leaf(args.min_samples_leaf)
+            found, audio_rate, wrench_rate = discover(args.bags, args)
         except ContactDetectorError as err:
             parser.error(str(err))
         trials = {}
         for i, folder in enumerate(args.bags):
-            trials.update(decode(find_bags([folder]), spec, f'{i}'))
+            trials.update(decode(found[folder], f'{i}'))
         families = ([f.strip() for f in args.lofo_families.split(',') if f.strip()]
                     if args.lofo_families else None)
         try:
@@ -177,7 +196,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
                 label_start_s=args.lofo_label_start, seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
-                families=families, audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
+                families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
                 jobs=args.jobs, progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         except ContactDetectorError as err:
             parser.error(str(err))
@@ -187,11 +206,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     if len(args.bags) != 2:
         parser.error('give TRAIN_DIR and HELDOUT_DIR (or --lofo with any folders)')
-    train = decode(find_bags([args.bags[0]]), spec, 'train')
-    heldout = decode(find_bags([args.bags[1]]), spec, 'heldout')
+    try:
+        found, audio_rate, wrench_rate = discover(args.bags, args)
+    except ContactDetectorError as err:
+        parser.error(str(err))
+    train = decode(found[args.bags[0]], 'train')
+    heldout = decode(found[args.bags[1]], 'heldout')
     rows, best_rows, totals = grid_study(
         train=train, heldout=heldout, settings=feature_grid(args.grid), seeds=args.seeds,
-        seed=args.seed, audio_rate=args.audio_rate, wrench_rate=args.wrench_rate, jobs=args.jobs,
+        seed=args.seed, audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=args.jobs,
         progress=lambda items: tqdm(items, desc='settings', unit='setting'))
     text = []
     if totals:
@@ -204,8 +227,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         text += ['## Ablation: train on the other condition sets, test on the one left out',
                  '', ablation_study(
                      trials={**train, **heldout}, sustain=args.ablation_sustain,
-                     seeds=args.seeds or [args.seed], audio_rate=args.audio_rate,
-                     wrench_rate=args.wrench_rate, jobs=args.jobs,
+                     seeds=args.seeds or [args.seed], audio_rate=audio_rate,
+                     wrench_rate=wrench_rate, jobs=args.jobs,
                      progress=lambda items: tqdm(items, desc='ablation', unit='setting')),
                  '']
     output = '\n'.join(text)
@@ -217,16 +240,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     return 0
 
 
-def with_model(args, spec) -> str:
+def with_model(args) -> str:
     """Decode the model's own test trials (``--own-test``) and the folders; score the rules."""
     bundle = load_bundle(path=args.model)
-    groups = []
+    folders = list(args.bags)
     if args.own_test is not None:
         test = set(bundle.training.get('test_trials', []))
         own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
-        groups.append((f'own {len(own)} test trials', decode(own, spec, 'own')))
+        folders.insert(0, (f'{args.own_test} (own test trials)', own))
+    found, audio_rate, wrench_rate = discover(folders, args)
+    groups = []
+    if args.own_test is not None:
+        own_found = found[folders[0][0]]
+        groups.append((f'own {len(own_found)} test trials', decode(own_found, 'own')))
     for i, folder in enumerate(args.bags):
-        trials = decode(find_bags([folder]), spec, f'{i}')
+        trials = decode(found[folder], f'{i}')
         groups.append((f'{Path(folder).name}: {len(trials)} trials', trials))
         if args.knocks:
             knocked = {name: trial for name, trial in trials.items() if knocked_in_air(trial[1])}
@@ -234,8 +262,7 @@ def with_model(args, spec) -> str:
                            'in the air', knocked))
     return model_study(bundle=bundle, groups=groups,
                        title=f'## Rules scored with {args.model.name} ({bundle.model_id})',
-                       audio_rate=args.audio_rate, wrench_rate=args.wrench_rate,
-                       jobs=args.jobs)
+                       audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=args.jobs)
 
 
 if __name__ == '__main__':

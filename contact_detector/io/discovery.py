@@ -394,3 +394,54 @@ def summary_lines(found: Sequence[tuple]) -> list:
     lines = [f'{bag.name}: {text}' for bag, text in texts]
     return lines + [f'warning: {bag.name}: {w} (give --audio-rate if wrong)'
                     for bag, w in warned]
+
+
+#: Rates of the bags of one run agree when within this fraction of their median.
+RATE_AGREEMENT = 0.01
+
+
+def common_rates(found: Sequence[tuple]) -> tuple[float, float]:
+    """
+    Return the one audio rate and one F/T rate of a run whose bags share them (Hz).
+
+    Each rate is the median over the bags (measured F/T rates differ from bag to bag in the
+    last digits); the bags agree when every one is within :data:`RATE_AGREEMENT` of it.
+
+    Parameters
+    ----------
+    found : sequence of (Path, Streams)
+        Each bag with its discovered streams (:func:`discover_streams`), every one with audio.
+
+    Returns
+    -------
+    audio_rate, wrench_rate : float
+
+    Raises
+    ------
+    BagError
+        No bag, a bag without audio, or rates that disagree: the error lists the rates found,
+        with the count of bags and a first bag at each.
+
+    """
+    if not found:
+        raise BagError('no bag to read')
+    silent = [bag.name for bag, streams in found if not streams.has_audio]
+    if silent:
+        raise BagError(f'{len(silent)} bags have no audio topic (first: {silent[0]})')
+    rates = []
+    for what, flag, key in (('audio', '--audio-rate', 'audio_rate'),
+                            ('F/T', '--wrench-rate', 'wrench_rate')):
+        values = np.array([getattr(streams, key) for _, streams in found], dtype=float)
+        middle = float(np.median(values))
+        if np.any(np.abs(values - middle) > RATE_AGREEMENT * middle):
+            groups: dict = {}
+            for (bag, _), value in zip(found, values):
+                groups.setdefault(f'{value:.4g}', []).append(bag)
+            listed = '; '.join(f'{rate} Hz: {len(bags)} bags (first {bags[0]})'
+                               for rate, bags in sorted(groups.items(),
+                                                        key=lambda kv: float(kv[0])))
+            raise BagError(f'the bags of one run must share one {what} rate, found {listed}; '
+                           f'run the folders separately, or give {flag} if the bags are '
+                           'wrongly stamped')
+        rates.append(middle)
+    return rates[0], rates[1]

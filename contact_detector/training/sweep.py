@@ -26,12 +26,14 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
+from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_features
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import frame_labels, score_trial, summarize, Truth
 from contact_detector.evaluation.truth import conditions_of, truth_for
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.compiled_forest import CompiledForest
@@ -77,9 +79,13 @@ class SweepRow:
 
 
 def decode_bags(*, bags: Sequence[Path], spec: StreamSpec, tag: str,
-                progress: Callable[[Iterable], Iterable] = iter) -> Dict[str, tuple]:
+                progress: Callable[[Iterable], Iterable] = iter,
+                found: Optional[Dict[Path, Streams]] = None) -> Dict[str, tuple]:
     """
     Decode every bag once, for the sweeps that reuse the messages.
+
+    ``found`` (bag -> discovered :class:`~contact_detector.io.discovery.Streams`) gives each
+    bag it names its own topics and audio format in place of ``spec``.
 
     Returns
     -------
@@ -91,7 +97,8 @@ def decode_bags(*, bags: Sequence[Path], spec: StreamSpec, tag: str,
     manifest = conditions_of(bags)
     out = {}
     for bag in progress(bags):
-        events = load_events(bag, spec=spec)
+        streams = (found or {}).get(bag)
+        events = load_events(bag, spec=spec if streams is None else stream_spec(streams, {}))
         out[f'{tag}/{bag.name}'] = (events, truth_for(bag, events, manifest))
     return out
 

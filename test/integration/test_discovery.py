@@ -21,7 +21,8 @@ from contact_detector.cli import detect as detect_cli
 from contact_detector.detection import factory
 from contact_detector.errors import BagError
 from contact_detector.io.bags import find_bags, iter_cdr, iter_messages
-from contact_detector.io.discovery import discover_streams, snap_audio_rate
+from contact_detector.io.discovery import (common_rates, discover_streams, snap_audio_rate,
+                                           Streams)
 from contact_detector.io.sensor_stream import AudioEvent, load_events, StreamSpec, WrenchEvent
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
@@ -328,3 +329,22 @@ def test_200_hz_ros1_bags_without_flags_decide_as_with_the_settings_by_hand(tmp_
     rows = _rows(found)
     assert rows == _rows(by_hand)
     assert sum(row.get('event') == 'release' for row in rows) == 3
+
+
+def _streams(*, wrench_rate: float, audio_rate: float = 16000.0) -> Streams:
+    return Streams(wrench_topic='/ft', audio_topic='/audio', audio_msg_type=I16,
+                   audio_rate=audio_rate, audio_rate_source='manifest', channels=1,
+                   coding='pcm', wrench_rate=wrench_rate, wrench_rate_source='stamps')
+
+
+def test_common_rates_take_the_median_of_agreeing_bags_and_list_disagreeing_ones():
+    found = [(Path(f'b{i}'), _streams(wrench_rate=r))
+             for i, r in enumerate((199.9, 200.0, 200.3))]
+    assert common_rates(found) == (16000.0, 200.0)
+    found.append((Path('slow'), _streams(wrench_rate=100.0)))
+    with pytest.raises(BagError, match=r'one F/T rate, found 100 Hz: 1 bags \(first slow\); '
+                                       r'199.9 Hz: 1 bags \(first b0\)'):
+        common_rates(found)
+    with pytest.raises(BagError, match='one audio rate'):
+        common_rates([(Path('a'), _streams(wrench_rate=100.0)),
+                      (Path('b'), _streams(wrench_rate=100.0, audio_rate=44100.0))])

@@ -18,6 +18,7 @@ from contact_detector.cli import sweep as sweep_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule
+from contact_detector.model.shipped import default_model_path
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
@@ -74,6 +75,42 @@ def test_model_rules_are_scored_on_its_test_trials_and_the_folders(data, tmp_pat
              for t in (0.3, 0.5, 0.7, 0.9)]
     assert fired == sorted(fired, reverse=True)
     capsys.readouterr()
+
+
+def test_sweep_measures_the_ft_rate_of_each_bag_and_a_flag_overrides_it(tmp_path, capsys):
+    bags = tmp_path / 'bags200'
+    trials = list(simulate_trials(n=4, seed=8, conditions=['all'], ft_rate=200.0))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=bags / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=bags)
+    model = str(default_model_path())
+
+    def sweep(*flags):
+        out = tmp_path / 'rules.md'
+        assert sweep_cli.main([str(bags), '--model', model, '--jobs', '1', '--out', str(out),
+                               *flags]) == 0
+        return out.read_text(), capsys.readouterr().out
+
+    measured, said = sweep()
+    assert f'contact-detector sweep: {bags}: 4 bags: wrench /wrist_wrench at 200 Hz (stamps)' \
+        in said
+    assert '16000 Hz, 1 ch (manifest)' in said
+    given, said = sweep('--wrench-rate', '200')
+    assert '200 Hz (flag)' in said
+    assert _table(measured) == _table(given)
+    wrong, said = sweep('--wrench-rate', '100')
+    assert 'wrench /wrist_wrench at 100 Hz (flag)' in said
+    assert _table(wrong) != _table(measured)      # 200 Hz read as 100 Hz: other features
+
+
+def test_sweep_refuses_bags_whose_ft_rates_disagree(tmp_path, capsys):
+    for rate in (100.0, 200.0):
+        trial = next(simulate_trials(n=1, seed=8, conditions=['paper'], ft_rate=rate))
+        write_trial_bag(trial=trial, path=tmp_path / f'at{rate:g}' / trial.name)
+    assert sweep_cli.main([str(tmp_path / 'at100'), str(tmp_path / 'at200'), '--model',
+                           str(default_model_path()), '--jobs', '1']) == 1
+    err = capsys.readouterr().err
+    assert 'one F/T rate' in err and '100 Hz: 1 bags' in err and '200 Hz: 1 bags' in err
 
 
 def test_knocks_scores_the_trials_knocked_on_the_hand_in_the_air(data, tmp_path, capsys):
