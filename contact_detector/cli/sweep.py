@@ -62,7 +62,7 @@ from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf
-from contact_detector.training.recipe import DEFAULT_RULE
+from contact_detector.training.recipe import DEFAULT_RULE, NO_AUDIO_RATE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE)
 from contact_detector.training.sweep import decode_bags, rows_markdown, seed_rows_markdown
@@ -91,22 +91,26 @@ def seed_list(text: str) -> List[int]:
     return seeds
 
 
-def discover(folders: Sequence, args: argparse.Namespace) -> tuple[dict, float, float]:
+def discover(folders: Sequence, args: argparse.Namespace, *,
+             allow_no_audio: bool = False) -> tuple[dict, float, float]:
     """
     Find every folder's bags and their streams (flags override); print one line per folder.
 
     Returns ``({folder: {bag: Streams}}, audio_rate, wrench_rate)``, the rates shared by all
     the bags (:func:`~contact_detector.io.discovery.common_rates`). ``folders`` holds folder
-    names, or ``(name, bags)`` for a chosen set of bags.
+    names, or ``(name, bags)`` for a chosen set of bags. ``allow_no_audio``: an F/T-only
+    model decides, so recordings without an audio topic are read (their audio rate is unused).
     """
     found = {}
     for folder in folders:
         name, bags = folder if isinstance(folder, tuple) else (folder, find_bags([folder]))
         found[name] = dict(discover_all(bags, args=args, params={},
-                                        prog=f'contact-detector sweep: {name}'))
+                                        prog=f'contact-detector sweep: {name}',
+                                        allow_no_audio=allow_no_audio))
     audio_rate, wrench_rate = common_rates([item for streams in found.values()
-                                            for item in streams.items()])
-    return found, audio_rate, wrench_rate
+                                            for item in streams.items()],
+                                           allow_no_audio=allow_no_audio)
+    return found, audio_rate or NO_AUDIO_RATE, wrench_rate
 
 
 def decode(found, tag):
@@ -248,7 +252,8 @@ def with_model(args) -> str:
         test = set(bundle.training.get('test_trials', []))
         own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
         folders.insert(0, (f'{args.own_test} (own test trials)', own))
-    found, audio_rate, wrench_rate = discover(folders, args)
+    found, audio_rate, wrench_rate = discover(folders, args,
+                                              allow_no_audio=bundle.feature_config.ft_only)
     groups = []
     if args.own_test is not None:
         own_found = found[folders[0][0]]

@@ -400,7 +400,8 @@ def summary_lines(found: Sequence[tuple]) -> list:
 RATE_AGREEMENT = 0.01
 
 
-def common_rates(found: Sequence[tuple]) -> tuple[float, float]:
+def common_rates(found: Sequence[tuple], *,
+                 allow_no_audio: bool = False) -> tuple[Optional[float], float]:
     """
     Return the one audio rate and one F/T rate of a run whose bags share them (Hz).
 
@@ -410,32 +411,41 @@ def common_rates(found: Sequence[tuple]) -> tuple[float, float]:
     Parameters
     ----------
     found : sequence of (Path, Streams)
-        Each bag with its discovered streams (:func:`discover_streams`), every one with audio.
+        Each bag with its discovered streams (:func:`discover_streams`).
+    allow_no_audio : bool
+        Bags without audio are read (an F/T-only model decides): if none has audio the audio
+        rate is None; the bags with audio must still share one rate.
 
     Returns
     -------
-    audio_rate, wrench_rate : float
+    audio_rate : float or None
+    wrench_rate : float
 
     Raises
     ------
     BagError
-        No bag, a bag without audio, or rates that disagree: the error lists the rates found,
-        with the count of bags and a first bag at each.
+        No bag, a bag without audio (unless ``allow_no_audio``), or rates that disagree: the
+        error lists the rates found, with the count of bags and a first bag at each.
 
     """
     if not found:
         raise BagError('no bag to read')
     silent = [bag.name for bag, streams in found if not streams.has_audio]
-    if silent:
+    if silent and not allow_no_audio:
         raise BagError(f'{len(silent)} bags have no audio topic (first: {silent[0]})')
-    rates = []
+    rates: list = []
     for what, flag, key in (('audio', '--audio-rate', 'audio_rate'),
                             ('F/T', '--wrench-rate', 'wrench_rate')):
-        values = np.array([getattr(streams, key) for _, streams in found], dtype=float)
+        measured = [(bag, getattr(streams, key)) for bag, streams in found
+                    if key != 'audio_rate' or streams.has_audio]
+        if not measured:
+            rates.append(None)
+            continue
+        values = np.array([value for _, value in measured], dtype=float)
         middle = float(np.median(values))
         if np.any(np.abs(values - middle) > RATE_AGREEMENT * middle):
             groups: dict = {}
-            for (bag, _), value in zip(found, values):
+            for bag, value in measured:
                 groups.setdefault(f'{value:.4g}', []).append(bag)
             listed = '; '.join(f'{rate} Hz: {len(bags)} bags (first {bags[0]})'
                                for rate, bags in sorted(groups.items(),

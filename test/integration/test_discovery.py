@@ -348,3 +348,15 @@ def test_common_rates_take_the_median_of_agreeing_bags_and_list_disagreeing_ones
     with pytest.raises(BagError, match='one audio rate'):
         common_rates([(Path('a'), _streams(wrench_rate=100.0)),
                       (Path('b'), _streams(wrench_rate=100.0, audio_rate=44100.0))])
+
+
+def test_common_rates_read_bags_without_audio_only_for_an_ft_only_model():
+    deaf = Streams(wrench_topic='/ft', audio_topic=None, audio_msg_type=None, audio_rate=None,
+                   audio_rate_source='', channels=1, coding='pcm', wrench_rate=200.0,
+                   wrench_rate_source='stamps')
+    with pytest.raises(BagError, match='1 bags have no audio topic'):
+        common_rates([(Path('deaf'), deaf)])
+    assert common_rates([(Path('deaf'), deaf)], allow_no_audio=True) == (None, 200.0)
+    # the bags that have audio still set (and must share) the audio rate
+    assert common_rates([(Path('deaf'), deaf), (Path('b'), _streams(wrench_rate=200.0))],
+                        allow_no_audio=True) == (16000.0, 200.0)

@@ -131,3 +131,20 @@ def test_train_with_audio_features_refuses_a_recording_without_audio(no_audio, t
                                                                      capsys):
     assert cli_main.main(['train', str(no_audio), '--out', str(tmp_path / 'x.npz')]) == 1
     assert 'no audio' in capsys.readouterr().err
+
+
+def test_sweep_scores_the_ft_model_on_recordings_without_audio(no_audio, tmp_path, capsys):
+    out = tmp_path / 'rules.md'
+    assert cli_main.main(['sweep', str(no_audio), '--model', str(default_ft_model_path()),
+                          '--out', str(out), '--jobs', '1']) == 0
+    assert 'no audio topic' in capsys.readouterr().out
+    shipped = next(line for line in out.read_text().splitlines()
+                   if '| p>=0.95 x1 or mean15>=0.4 |' in line)
+    cells = [cell.strip() for cell in shipped.strip('|').split('|')]
+    detected, premature = cells[2], cells[4]    # the model decided every trial, none early
+    assert detected.endswith(f'/{N_TRIALS}') and int(detected.split('/')[0]) >= N_TRIALS - 1
+    assert premature == '0'
+    # a multimodal model still needs the audio topic
+    assert cli_main.main(['sweep', str(no_audio), '--model',
+                          'models/contact_forest.npz', '--jobs', '1']) == 1
+    assert 'no audio' in capsys.readouterr().err
