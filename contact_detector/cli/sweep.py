@@ -91,26 +91,29 @@ def seed_list(text: str) -> List[int]:
     return seeds
 
 
-def discover(folders: Sequence, args: argparse.Namespace, *,
+def discover(folders: Sequence[tuple], args: argparse.Namespace, *,
              allow_no_audio: bool = False) -> tuple[dict, float, float]:
     """
-    Find every folder's bags and their streams (flags override); print one line per folder.
+    Find the streams of every folder's bags (flags override); print one line per folder.
 
-    Returns ``({folder: {bag: Streams}}, audio_rate, wrench_rate)``, the rates shared by all
-    the bags (:func:`~contact_detector.io.discovery.common_rates`). ``folders`` holds folder
-    names, or ``(name, bags)`` for a chosen set of bags. ``allow_no_audio``: an F/T-only
+    ``folders`` holds ``(name, bags)`` pairs (:func:`folder_bags`). Returns ``({name: {bag:
+    Streams}}, audio_rate, wrench_rate)``, the rates shared by all the bags
+    (:func:`~contact_detector.io.discovery.common_rates`). ``allow_no_audio``: an F/T-only
     model decides, so recordings without an audio topic are read (their audio rate is unused).
     """
-    found = {}
-    for folder in folders:
-        name, bags = folder if isinstance(folder, tuple) else (folder, find_bags([folder]))
-        found[name] = dict(discover_all(bags, args=args, params={},
-                                        prog=f'contact-detector sweep: {name}',
-                                        allow_no_audio=allow_no_audio))
+    found = {name: dict(discover_all(bags, args=args, params={},
+                                     prog=f'contact-detector sweep: {name}',
+                                     allow_no_audio=allow_no_audio))
+             for name, bags in folders}
     audio_rate, wrench_rate = common_rates([item for streams in found.values()
                                             for item in streams.items()],
                                            allow_no_audio=allow_no_audio)
     return found, audio_rate or NO_AUDIO_RATE, wrench_rate
+
+
+def folder_bags(folders: Sequence) -> list:
+    """``(folder, its bags)`` for each folder given on the command line."""
+    return [(folder, find_bags([folder])) for folder in folders]
 
 
 def decode(found, tag):
@@ -186,7 +189,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         try:
             augmentation = augmentation_from_args(args)
             check_min_samples_leaf(args.min_samples_leaf)
-            found, audio_rate, wrench_rate = discover(args.bags, args)
+            found, audio_rate, wrench_rate = discover(folder_bags(args.bags), args)
         except ContactDetectorError as err:
             parser.error(str(err))
         trials = {}
@@ -211,7 +214,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if len(args.bags) != 2:
         parser.error('give TRAIN_DIR and HELDOUT_DIR (or --lofo with any folders)')
     try:
-        found, audio_rate, wrench_rate = discover(args.bags, args)
+        found, audio_rate, wrench_rate = discover(folder_bags(args.bags), args)
     except ContactDetectorError as err:
         parser.error(str(err))
     train = decode(found[args.bags[0]], 'train')
@@ -247,17 +250,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 def with_model(args) -> str:
     """Decode the model's own test trials (``--own-test``) and the folders; score the rules."""
     bundle = load_bundle(path=args.model)
-    folders = list(args.bags)
+    folders = folder_bags(args.bags)
+    own_name = f'{args.own_test} (own test trials)'
     if args.own_test is not None:
         test = set(bundle.training.get('test_trials', []))
         own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
-        folders.insert(0, (f'{args.own_test} (own test trials)', own))
+        folders.insert(0, (own_name, own))
     found, audio_rate, wrench_rate = discover(folders, args,
                                               allow_no_audio=bundle.feature_config.ft_only)
     groups = []
     if args.own_test is not None:
-        own_found = found[folders[0][0]]
-        groups.append((f'own {len(own_found)} test trials', decode(own_found, 'own')))
+        groups.append((f'own {len(found[own_name])} test trials',
+                       decode(found[own_name], 'own')))
     for i, folder in enumerate(args.bags):
         trials = decode(found[folder], f'{i}')
         groups.append((f'{Path(folder).name}: {len(trials)} trials', trials))
