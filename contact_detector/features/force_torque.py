@@ -122,7 +122,6 @@ class ForceTorqueStream:
     def reset(self) -> None:
         """Forget everything, including the last stamp seen and the carried load."""
         self.last_input_t: Optional[float] = None
-        self.carried: Optional[np.ndarray] = None
         #: The last completed measurement (load, how far it moved), None before the first.
         self.carried_load: Optional[CarriedLoad] = None
         self.measure_carried()
@@ -287,9 +286,13 @@ class ForceTorqueStream:
             self._previous_carried = self.carried
             self.carried_load = measure_carried_load(rows=self._carried_rows.view,
                                                      floor=self._floor)
-            self.carried = self.carried_load.load
             self._carried_from = self._n_dec + missing - 1
             self._measuring = False
+
+    @property
+    def carried(self) -> Optional[np.ndarray]:
+        """Return the carried load, shape (6,) (N, N m): :attr:`carried_load`'s, or None."""
+        return None if self.carried_load is None else self.carried_load.load
 
     def _carried_per_frame(self, ends: np.ndarray) -> np.ndarray:
         # (m, 6) carried load of each frame (decimated indices ends + self._mag_start)
