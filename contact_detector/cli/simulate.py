@@ -28,7 +28,8 @@ from typing import Sequence
 
 from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
-from contact_detector.sim.conditions import ALIASES, CONDITION_SETS, resolve_conditions
+from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, EVENT_MODES,
+                                             resolve_conditions)
 from contact_detector.sim.trial import simulate_trial, simulate_trials
 from tqdm import tqdm
 
@@ -47,7 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
                f'those twelve. real_sounds (recorded sounds) needs tools/fetch_sounds.sh '
                f'first. Trial i uses condition i mod len(conditions); within a set the '
                f'exogenous hits cycle hand, table, none (exogenous: mixed, touch, brush, '
-               f'setdown).')
+               f'setdown); with --events everywhere the other sets add mixed (any of hand, '
+               f'table, touch, brush, setdown per event).')
     parser.add_argument('out_dir', metavar='OUT_DIR', type=Path,
                         help='directory for the bags and manifest.json (created)')
     parser.add_argument('--trials', type=int, default=6, metavar='N',
@@ -71,6 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
                              f'(default paper; known: {", ".join([*CONDITION_SETS, *ALIASES])})')
     parser.add_argument('--start-index', type=int, default=0, metavar='I',
                         help='index of the first trial (default 0)')
+    parser.add_argument('--events', choices=EVENT_MODES, default='family',
+                        help="family (default): touches, brushes and set-downs only in the "
+                             "exogenous set; everywhere: in every set (the shipped models' "
+                             "training trials)")
     parser.add_argument('--overwrite', action='store_true',
                         help='replace existing trial_* bags and manifest.json in OUT_DIR')
     parser.add_argument('--quiet', action='store_true', help='no progress bar or summary')
@@ -106,7 +112,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         # validate the arguments before touching OUT_DIR
         simulate_trial(seed=args.seed, index=args.start_index, condition=conditions[0],
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
-                       chunk_size=args.chunk_size, label_window_s=args.label_window)
+                       chunk_size=args.chunk_size, label_window_s=args.label_window,
+                       events=args.events)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -114,11 +121,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
-                                 label_window_s=args.label_window)
+                                 label_window_s=args.label_window, events=args.events)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
-                    'chunk_size': args.chunk_size, 'label_window_s': args.label_window}
+                    'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
+                    'events': args.events}
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -353,6 +353,17 @@ _F_REAL = {
 EVENT_KINDS = ('hand', 'table', 'touch', 'brush', 'setdown')
 #: The hit kinds a set cycles through in :func:`contact_detector.sim.trial.simulate_trials`.
 DEFAULT_HIT_CYCLE = ('hand', 'table', 'none')
+#: How a set's exogenous events are drawn: ``'family'``, its own hit cycle (touches, brushes
+#: and set-downs only in 'exogenous'); ``'everywhere'``, every set with the default cycle adds
+#: ``'mixed'`` trials (:data:`EVERYWHERE_HIT_CYCLE`), so every family has every kind of event.
+EVENT_MODES = ('family', 'everywhere')
+#: The hit cycle of a default-cycle set with ``events='everywhere'``.
+EVERYWHERE_HIT_CYCLE = DEFAULT_HIT_CYCLE + ('mixed',)
+#: The event parameters a set draws with ``events='everywhere'`` when its family does not
+#: (the 'exogenous' ranges; their own random stream, so the trial is otherwise unchanged).
+EVENT_RANGES: dict[str, Spec] = {
+    name: spec for name, spec in _F_EXOGENOUS.items() if name.split('_')[0] in
+    ('touch', 'brush', 'setdown')}
 
 
 @dataclass(frozen=True)
@@ -406,6 +417,21 @@ class ConditionSet:
         """
         drawn = {name: self.family[name].sample(rng) for name in sorted(self.family)}
         return FamilyParams(**drawn), drawn
+
+    def cycle(self, *, events: str = 'family') -> tuple:
+        """
+        Return the hit kinds this set cycles through.
+
+        Parameters
+        ----------
+        events : str
+            One of :data:`EVENT_MODES`: ``'family'`` gives :attr:`hit_cycle`; ``'everywhere'``
+            gives :data:`EVERYWHERE_HIT_CYCLE` for a set with the default cycle.
+
+        """
+        if events == 'everywhere' and self.hit_cycle == DEFAULT_HIT_CYCLE:
+            return EVERYWHERE_HIT_CYCLE
+        return self.hit_cycle
 
 
 def _make(name: str, description: str, overrides: Mapping[str, Spec],

@@ -57,7 +57,8 @@ from typing import Iterator, Sequence
 
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
-from contact_detector.sim.conditions import DEFAULT_HIT_CYCLE, get_condition, resolve_conditions
+from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
+                                             get_condition, resolve_conditions)
 from contact_detector.sim.geometry import draw_geometry
 from contact_detector.sim.hits import Hit, plan_hits
 from contact_detector.sim.loads import (contact_law, draw_sensor_errors, first_crossing, G,
@@ -177,7 +178,8 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
     return ends, jitter, n
 
 
-def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits) -> None:
+def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
+                events) -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
@@ -194,11 +196,14 @@ def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s,
         raise ConfigError(f'label_window_s must be in (0, 1] s, got {label_window_s!r}')
     if hits is not None and hits not in HIT_KINDS:
         raise ConfigError(f'hits must be None or one of {HIT_KINDS}, got {hits!r}')
+    if events not in EVENT_MODES:
+        raise ConfigError(f'events must be one of {EVENT_MODES}, got {events!r}')
 
 
 def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rate: int = 16000,
                    ft_rate: float = 100.0, chunk_size: int | None = None,
-                   label_window_s: float = 0.1, hits: str | None = None) -> Trial:
+                   label_window_s: float = 0.1, hits: str | None = None,
+                   events: str = 'family') -> Trial:
     """
     Synthesise one trial.
 
@@ -223,6 +228,13 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         (:data:`HIT_KINDS`); None draws one of 'none', 'hand', 'table' uniformly (the
         'exogenous' set: one of its ``hit_cycle``). Changing it changes nothing else in the
         trial.
+    events : str
+        'family' (default) or 'everywhere' (:data:`~contact_detector.sim.conditions.
+        EVENT_MODES`): with 'everywhere', a set whose family does not draw the touch, brush and
+        set-down parameters draws them from the 'exogenous' ranges, in a stream of their own
+        (``default_rng([seed, index, 8])``), and ``hits=None`` draws from the set's
+        :meth:`~contact_detector.sim.conditions.ConditionSet.cycle`. The rest of the trial is
+        the one ``events='family'`` gives.
 
     Returns
     -------
@@ -235,7 +247,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
 
     """
     _check_args(seed=seed, index=index, audio_rate=audio_rate, ft_rate=ft_rate,
-                chunk_size=chunk_size, label_window_s=label_window_s, hits=hits)
+                chunk_size=chunk_size, label_window_s=label_window_s, hits=hits,
+                events=events)
     cond = get_condition(condition)
     seed, index, audio_rate, ft_rate = int(seed), int(index), int(audio_rate), float(ft_rate)
     rng = np.random.default_rng([seed, index])
@@ -245,6 +258,13 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     q, _drawn = cond.sample_family(fam_rng)
     if cond.hit_cycle != DEFAULT_HIT_CYCLE:
         drawn_kind = cond.hit_cycle[int(fam_rng.integers(0, len(cond.hit_cycle)))]
+    missing = sorted(set(EVENT_RANGES) - set(cond.family))
+    if events == 'everywhere' and missing:
+        # a stream of its own, so every other parameter stays what 'family' draws
+        ev_rng = np.random.default_rng([seed, index, 8])
+        q = replace(q, **{name: EVENT_RANGES[name].sample(ev_rng) for name in missing})
+        cycle = cond.cycle(events=events)
+        drawn_kind = cycle[int(ev_rng.integers(0, len(cycle)))] if hits is None else drawn_kind
     hit_kind = hits if hits is not None else drawn_kind
     # the 'real_sounds' family: recordings from the fetched bank (ConfigError if missing)
     bank = sound_bank.load_bank() if q.sound_source == 'real' else None
@@ -442,18 +462,20 @@ def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',)
     """
     Yield ``n`` trials; trial ``i`` uses ``conditions[i % len(conditions)]``.
 
-    Within each condition set the hit kinds cycle its ``hit_cycle``: 'hand', 'table', 'none'
-    (so about a third of each set's trials get hand hits and a third table hits, as in the
-    paper's 20/20/20 of 60); 'mixed', 'touch', 'brush', 'setdown' for 'exogenous'.
-    ``conditions`` may contain the aliases 'all', 'families' and 'wide'. Other keywords go to
-    :func:`simulate_trial`.
+    Within each condition set the hit kinds cycle its
+    :meth:`~contact_detector.sim.conditions.ConditionSet.cycle` for ``events`` (a keyword of
+    :func:`simulate_trial`, default 'family'): 'hand', 'table', 'none' (so about a third of
+    each set's trials get hand hits and a third table hits, as in the paper's 20/20/20 of 60),
+    plus 'mixed' with ``events='everywhere'``; 'mixed', 'touch', 'brush', 'setdown' for
+    'exogenous'. ``conditions`` may contain the aliases 'all', 'families' and 'wide'. Other
+    keywords go to :func:`simulate_trial`.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f'n must be an int >= 0, got {n!r}')
     names = resolve_conditions(conditions)
     for i in range(start_index, start_index + int(n)):
         cond = names[i % len(names)]
-        kinds = get_condition(cond).hit_cycle
+        kinds = get_condition(cond).cycle(events=kw.get('events', 'family'))
         hits = kw['hits'] if 'hits' in kw else kinds[(i // len(names)) % len(kinds)]
         rest = {k: v for k, v in kw.items() if k != 'hits'}
         yield simulate_trial(seed=seed, index=i, condition=cond, hits=hits, **rest)
