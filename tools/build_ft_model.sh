@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Rebuild the shipped F/T-only model (robots without a microphone). Training data: 480
-# simulated trials over all twelve condition sets ('wide', seed 11, 40 per set); simulated into
-# DIR (default data/train_wide) unless DIR already holds those trials (its manifest says seed
-# 11, 480 trials, 'wide'). Recipe, chosen by leaving each simulator family out
+# simulated trials over all twelve condition sets ('wide', seed 11, 40 per set) with touches,
+# brushes and set-downs in every family (--events everywhere,
+# docs/decisions/2026-11-24-events-in-every-family.md); simulated into DIR (default
+# data/train_events) unless DIR already holds those trials (its manifest says seed 11, 480
+# trials, 'wide', events everywhere). Recipe, chosen by leaving each simulator family out
 # (contact-detector sweep --lofo --lofo-settings ft-only+signed,ft-only+signed+carried
 # --lofo-label-start 0.03, docs/offline.md "Robots without a microphone") and fresh trials:
 # train --no-audio with the six spectral F/T features, the six vector-shift features, the four
@@ -23,7 +25,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
 cd "$root"
-data="${1:-$root/data/train_wide}"
+data="${1:-$root/data/train_events}"
 if ! .venv/bin/python - "$data" <<'EOF'
 import json, sys
 from pathlib import Path
@@ -32,11 +34,12 @@ try:
 except (OSError, ValueError, KeyError):
     sys.exit(1)
 sys.exit(0 if (s.get('seed'), s.get('trials'), s.get('start_index')) == (11, 480, 0)
-         and len(s.get('conditions', ())) == 12 else 1)
+         and len(s.get('conditions', ())) == 12 and s.get('events') == 'everywhere'
+         and s.get('hits') is None else 1)
 EOF
 then
   .venv/bin/contact-detector simulate "$data" --trials 480 --seed 11 --conditions wide \
-    --overwrite --quiet
+    --events everywhere --overwrite --quiet
 fi
 .venv/bin/contact-detector train "$data" --no-audio \
   --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max,force_shift_rel,torque_shift_rel,force_carried_cos,torque_carried_cos \

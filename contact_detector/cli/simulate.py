@@ -30,7 +30,7 @@ from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
 from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, EVENT_MODES,
                                              resolve_conditions)
-from contact_detector.sim.trial import simulate_trial, simulate_trials
+from contact_detector.sim.trial import HIT_KINDS, simulate_trial, simulate_trials
 from tqdm import tqdm
 
 PROG = 'contact-detector simulate'
@@ -74,9 +74,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--start-index', type=int, default=0, metavar='I',
                         help='index of the first trial (default 0)')
     parser.add_argument('--events', choices=EVENT_MODES, default='family',
-                        help="family (default): touches, brushes and set-downs only in the "
-                             "exogenous set; everywhere: in every set (the shipped models' "
-                             "training trials)")
+                        help='family (default): touches, brushes and set-downs only in the '
+                             'exogenous set; everywhere: in every set')
+    parser.add_argument('--hits', choices=HIT_KINDS, default=None,
+                        help='give every trial this kind of exogenous event instead of the '
+                             "set's cycle (mixed: any of hand, table, touch, brush, setdown "
+                             'per event)')
     parser.add_argument('--overwrite', action='store_true',
                         help='replace existing trial_* bags and manifest.json in OUT_DIR')
     parser.add_argument('--quiet', action='store_true', help='no progress bar or summary')
@@ -113,7 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         simulate_trial(seed=args.seed, index=args.start_index, condition=conditions[0],
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                        chunk_size=args.chunk_size, label_window_s=args.label_window,
-                       events=args.events)
+                       events=args.events, hits=args.hits)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -121,12 +124,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
-                                 label_window_s=args.label_window, events=args.events)
+                                 label_window_s=args.label_window, events=args.events,
+                                 **({} if args.hits is None else {'hits': args.hits}))
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
                     'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
-                    'events': args.events}
+                    'events': args.events, 'hits': args.hits}
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

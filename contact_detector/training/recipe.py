@@ -21,6 +21,7 @@ the card's record of the training data, and the event metrics of the full detect
 test recordings.
 """
 
+from collections import Counter
 from dataclasses import dataclass
 import json
 from pathlib import Path
@@ -297,6 +298,11 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                for kind, r in results.items()}
     training = {'trials': len(trials), 'frames': int(y.size), 'contact_frames': int(y.sum()),
                 'conditions': sorted({t.condition for t in trials}),
+                # which knocks, touches, brushes and set-downs the forest was shown (from the
+                # simulator's manifests; recorded bags add none)
+                'exogenous_events': dict(sorted(Counter(
+                    i['kind'] for b in bags for i in manifest.get(b, {}).get('impacts', ())
+                ).items())),
                 'test_trials': quoted.test_trials, 'seed': seed,
                 'min_samples_leaf': min_samples_leaf,
                 'augmentation': augmentation.to_dict() if augmentation else None,

@@ -138,6 +138,10 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
     card = json.loads(model.with_name('mine.card.json').read_text())
     assert card['training']['sources'] == sources
     assert load_bundle(path=model).training['trials'] == 6
+    # the card says which exogenous events the forest was shown: the simulated trials' ones
+    held = json.loads((sim / 'manifest.json').read_text())['trials']
+    kinds = [i['kind'] for t in held for i in t['impacts']]
+    assert kinds and card['training']['exogenous_events'] == {k: kinds.count(k) for k in kinds}
     assert sorted(p.name for p in sim.glob('trial_*')) == [f'trial_000{i}' for i in range(3)]
     capsys.readouterr()
     # The kept trials are reused; a folder holding other trials is refused.

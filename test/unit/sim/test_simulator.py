@@ -430,6 +430,7 @@ def test_manifest_schema(manifest):
         assert key in entry
     json.dumps(manifest, allow_nan=False)
     assert manifest['format'] == 'contact_detector.sim.manifest'
+    assert manifest['settings']['events'] == 'family'
 
 
 @pytest.mark.slow
@@ -606,6 +607,45 @@ def test_exogenous_events_in_the_air():
                 continue  # a touch on the arm: look for one on the object
             checked.add(kind)
     assert checked == {'touch', 'brush', 'setdown'}
+
+
+@pytest.mark.slow
+def test_events_everywhere_puts_touches_brushes_and_setdowns_in_every_family():
+    n = 96  # two rounds of the four-kind cycle over the twelve sets
+    family = list(simulate_trials(n=n, seed=SEED, conditions=['wide']))
+    everywhere = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], events='everywhere'))
+    assert get_condition('paper').cycle(events='everywhere') == ('hand', 'table', 'none',
+                                                                 'mixed')
+    assert get_condition('exogenous').cycle(events='everywhere') == \
+        get_condition('exogenous').hit_cycle
+    same = 0
+    for a, b in zip(family, everywhere):
+        assert a.condition == b.condition and a.onset_t == b.onset_t
+        if a.params['derived']['hits'] == b.params['derived']['hits']:
+            # a trial of the same kind is the trial '--events family' gives
+            same += 1
+            assert a.impacts == b.impacts
+            assert np.array_equal(a.force, b.force) and np.array_equal(a.audio, b.audio)
+    assert same >= n // 3
+    assert sum(tr.params['derived']['hits'] == 'mixed' for tr in everywhere
+               if tr.condition != 'exogenous') == 2 * 11
+    others = [tr for tr in everywhere if tr.condition != 'exogenous']
+    kinds = {i.kind for tr in others for i in tr.impacts}
+    assert {'touch', 'brush', 'setdown'} <= kinds
+    assert {i.kind for tr in family if tr.condition != 'exogenous'
+            for i in tr.impacts} <= {'hand', 'table'}
+    with_brush = {tr.condition for tr in others if any(i.kind == 'brush' for i in tr.impacts)}
+    assert len(with_brush) >= 4  # not one family's quirk
+
+
+def test_unknown_event_mode_is_refused(tmp_path, capsys):
+    with pytest.raises(ConfigError, match='events must be one of'):
+        simulate_trial(seed=1, index=0, events='sometimes')
+    with pytest.raises(SystemExit) as exc:
+        simulate_main([str(tmp_path / 'x'), '--events', 'sometimes'])
+    assert exc.value.code == 2
+    assert 'invalid choice' in capsys.readouterr().err
+    assert not (tmp_path / 'x').exists()
 
 
 def test_quiet_contact_and_ego_noise_families():
