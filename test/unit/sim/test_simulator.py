@@ -638,6 +638,22 @@ def test_events_everywhere_puts_touches_brushes_and_setdowns_in_every_family():
     assert len(with_brush) >= 4  # not one family's quirk
 
 
+@pytest.mark.slow
+def test_cli_hits_gives_every_trial_that_kind_and_the_manifest_says_so(tmp_path):
+    out = tmp_path / 'mixed'
+    assert simulate_main([str(out), '--trials', '3', '--seed', '4', '--conditions', 'paper',
+                          '--events', 'everywhere', '--hits', 'mixed', '--quiet']) == 0
+    manifest = read_manifest(out)
+    assert manifest['settings']['events'] == 'everywhere'
+    assert manifest['settings']['hits'] == 'mixed'
+    assert [t['params']['derived']['hits'] for t in manifest['trials']] == ['mixed'] * 3
+    # without --hits the set's cycle gives hand, table, none
+    assert simulate_main([str(tmp_path / 'x'), '--trials', '3', '--seed', '4', '--conditions',
+                          'paper', '--quiet']) == 0
+    cycled = read_manifest(tmp_path / 'x')['trials']
+    assert [t['params']['derived']['hits'] for t in cycled] == ['hand', 'table', 'none']
+
+
 def test_unknown_event_mode_is_refused(tmp_path, capsys):
     with pytest.raises(ConfigError, match='events must be one of'):
         simulate_trial(seed=1, index=0, events='sometimes')
