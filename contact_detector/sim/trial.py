@@ -229,12 +229,11 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         'exogenous' set: one of its ``hit_cycle``). Changing it changes nothing else in the
         trial.
     events : str
-        'family' (default) or 'everywhere' (:data:`~contact_detector.sim.conditions.
-        EVENT_MODES`): with 'everywhere', a set whose family does not draw the touch, brush and
-        set-down parameters draws them from the 'exogenous' ranges, in a stream of their own
+        'family' (default) or 'everywhere' (``EVENT_MODES`` of :mod:`.conditions`): with
+        'everywhere', a set whose family does not draw the touch, brush and set-down
+        parameters draws them from the 'exogenous' ranges, in a stream of their own
         (``default_rng([seed, index, 8])``), and ``hits=None`` draws from the set's
-        :meth:`~contact_detector.sim.conditions.ConditionSet.cycle`. The rest of the trial is
-        the one ``events='family'`` gives.
+        ``ConditionSet.cycle``. The rest of the trial is the one ``events='family'`` gives.
 
     Returns
     -------
@@ -258,8 +257,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     q, _drawn = cond.sample_family(fam_rng)
     if cond.hit_cycle != DEFAULT_HIT_CYCLE:
         drawn_kind = cond.hit_cycle[int(fam_rng.integers(0, len(cond.hit_cycle)))]
-    missing = sorted(set(EVENT_RANGES) - set(cond.family))
-    if events == 'everywhere' and missing:
+    missing = sorted(set(EVENT_RANGES) - set(cond.family)) if events == 'everywhere' else []
+    if missing:
         # a stream of its own, so every other parameter stays what 'family' draws
         ev_rng = np.random.default_rng([seed, index, 8])
         q = replace(q, **{name: EVENT_RANGES[name].sample(ev_rng) for name in missing})
