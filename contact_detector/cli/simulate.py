@@ -125,7 +125,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window, events=args.events,
-                                 **({} if args.hits is None else {'hits': args.hits}))
+                                 hits=args.hits)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,

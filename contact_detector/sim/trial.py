@@ -457,27 +457,28 @@ def _family_facts(setup: Setup, *, force: np.ndarray, torque: np.ndarray, start:
 
 
 def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',),
-                    start_index: int = 0, **kw) -> Iterator[Trial]:
+                    start_index: int = 0, hits: str | None = None, events: str = 'family',
+                    **kw) -> Iterator[Trial]:
     """
     Yield ``n`` trials; trial ``i`` uses ``conditions[i % len(conditions)]``.
 
-    Within each condition set the hit kinds cycle its
-    :meth:`~contact_detector.sim.conditions.ConditionSet.cycle` for ``events`` (a keyword of
-    :func:`simulate_trial`, default 'family'): 'hand', 'table', 'none' (so about a third of
-    each set's trials get hand hits and a third table hits, as in the paper's 20/20/20 of 60),
-    plus 'mixed' with ``events='everywhere'``; 'mixed', 'touch', 'brush', 'setdown' for
-    'exogenous'. ``conditions`` may contain the aliases 'all', 'families' and 'wide'. Other
-    keywords go to :func:`simulate_trial`.
+    With ``hits=None`` the hit kinds cycle, within each condition set, its
+    :meth:`~contact_detector.sim.conditions.ConditionSet.cycle` for ``events``: 'hand',
+    'table', 'none' (so about a third of each set's trials get hand hits and a third table
+    hits, as in the paper's 20/20/20 of 60), plus 'mixed' with ``events='everywhere'``;
+    'mixed', 'touch', 'brush', 'setdown' for 'exogenous'. A ``hits`` kind is given to every
+    trial. ``conditions`` may contain the aliases 'all', 'families' and 'wide'. ``hits``,
+    ``events`` and the other keywords go to :func:`simulate_trial`.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f'n must be an int >= 0, got {n!r}')
     names = resolve_conditions(conditions)
     for i in range(start_index, start_index + int(n)):
         cond = names[i % len(names)]
-        kinds = get_condition(cond).cycle(events=kw.get('events', 'family'))
-        hits = kw['hits'] if 'hits' in kw else kinds[(i // len(names)) % len(kinds)]
-        rest = {k: v for k, v in kw.items() if k != 'hits'}
-        yield simulate_trial(seed=seed, index=i, condition=cond, hits=hits, **rest)
+        kinds = get_condition(cond).cycle(events=events)
+        kind = hits if hits is not None else kinds[(i // len(names)) % len(kinds)]
+        yield simulate_trial(seed=seed, index=i, condition=cond, hits=kind, events=events,
+                             **kw)
 
 
 def _jsonable(value):
