@@ -166,21 +166,23 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_
         held = json.loads((sim_dir / 'manifest.json').read_text())
         raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
                        'give an empty or new --sim-dir')
-    out = SimulatedSet(bags=[], parts={}, reused=())
-    for name, settings in sim_parts(n=n, seed=seed, ft_rate=ft_rate,
-                                    audio_rate=audio_rate).items():
-        part_dir = sim_dir / name
-        manifest = part_dir / 'manifest.json'
+    parts = sim_parts(n=n, seed=seed, ft_rate=ft_rate, audio_rate=audio_rate)
+    held = {}
+    for name, settings in parts.items():     # every part checked before any is simulated
+        manifest = sim_dir / name / 'manifest.json'
         if manifest.exists():
-            held = json.loads(manifest.read_text())
-            have = dict(held.get('settings', {}))
+            held[name] = json.loads(manifest.read_text())
+            have = dict(held[name].get('settings', {}))
             same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
             if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
-                raise BagError(f'{part_dir} holds other simulated trials '
-                               f'({held.get("settings")}); give an empty or new --sim-dir')
-            out.bags += [part_dir / t['bag'] for t in held['trials']]
-            out.parts[name] = held['settings']
-            out.reused += (name,)
+                raise BagError(f'{sim_dir / name} holds other simulated trials '
+                               f'({held[name].get("settings")}); give an empty or new --sim-dir')
+    out = SimulatedSet(bags=[], parts={}, reused=tuple(held))
+    for name, settings in parts.items():
+        part_dir = sim_dir / name
+        if name in held:
+            out.bags += [part_dir / t['bag'] for t in held[name]['trials']]
+            out.parts[name] = held[name]['settings']
             continue
         trials = simulate_trials(n=settings['trials'], seed=settings['seed'],
                                  conditions=settings['conditions'],

@@ -25,6 +25,7 @@ import subprocess
 import sys
 
 from contact_detector.cli import evaluate as evaluate_cli
+from contact_detector.cli import simulate as simulate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
 from contact_detector.model.storage import load_bundle
@@ -169,6 +170,13 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
         f'trial_000{i}' for i in range(6)]
     assert sorted(p.name for p in (sim / 'mixed').glob('trial_*')) == [
         'trial_0006', 'trial_0007']
+    # each part is what `simulate` writes for the same settings (docs/your-robot.md)
+    same = tmp_path / 'same'
+    assert simulate_cli.main([str(same), '--trials', '2', '--seed', '1', '--start-index', '6',
+                              '--conditions', 'wide', '--events', 'everywhere', '--hits',
+                              'mixed', '--ft-rate', '125', '--quiet']) == 0
+    assert (json.loads((same / 'manifest.json').read_text())
+            == json.loads((sim / 'mixed' / 'manifest.json').read_text()))
     capsys.readouterr()
     # The kept trials are reused; a folder holding other trials is refused.
     # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same)
