@@ -22,10 +22,12 @@ Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with ro
 ``bag,onset_start,onset_end``, several rows for a recording with several contacts); features
 from the same streaming core the node runs. ``--with-sim N`` adds N simulated trials of the
 ``wide`` condition sets (all twelve simulator families, at the recordings' F/T rate to 1 Hz
-and audio rate, labelled by the simulator's truth) to the recordings: in a temporary
-directory, or in ``--sim-dir`` to keep them (a folder that already holds those N trials is
-reused). The model
-card's ``training.sources`` records what the model was trained on. The report directory gets
+and audio rate, labelled by the simulator's truth) in the shipped model's proportions: N - M
+with each family's own exogenous events (seed --seed) and M = N/5 rounded (120 of 600) with
+any knock, touch, brush or set-down in every family (seed --seed + 1); in a temporary
+directory, or in ``--sim-dir`` to keep them (``DIR/family`` and ``DIR/mixed``; a folder that
+already holds those trials is reused, one that holds others is refused). The model card's
+``training.sources`` records what the model was trained on. The report directory gets
 ``summary.md``, ``metrics.json`` and PNG figures (confusion matrix, ROC curve, feature
 importance). The saved model is the trial-split forest refit on train + validation.
 """
@@ -48,8 +50,8 @@ from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
 from contact_detector.training.protocol import LabelWindow, read_labels_csv, unlabelled_bags
-from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, simulated_trials,
-                                              train_model, training_sources)
+from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
+                                              simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
 import numpy as np
 from tqdm import tqdm
@@ -68,10 +70,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='CSV of bag,onset_start,onset_end (instead of /contact_truth); '
                              'several rows for a recording with several contacts')
     parser.add_argument('--with-sim', type=int, default=0, metavar='N',
-                        help='add N simulated trials of the wide condition sets (default 0)')
+                        help='add N simulated trials of the wide condition sets (default 0): '
+                             "N - round(N/5) with each family's own exogenous events (seed "
+                             '--seed), round(N/5) with any knock, touch, brush or set-down in '
+                             'every family (seed --seed + 1), as the shipped model')
     parser.add_argument('--sim-dir', type=Path, default=None, metavar='DIR',
-                        help='keep the --with-sim trials in DIR (reused if it holds them; '
-                             'default: a temporary directory)')
+                        help='keep the --with-sim trials in DIR/family and DIR/mixed (reused '
+                             'if it holds them, refused if it holds others; default: a '
+                             'temporary directory)')
     parser.add_argument('--format', choices=('npz', 'joblib', 'skops'), default=None,
                         help='model format (default: from the --out suffix; npz loads with '
                              'numpy alone, docs/model.md)')
@@ -126,28 +132,33 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
                   file=sys.stderr)
             return 1
-    sim_bags, sim_settings = [], {}
+    sim = None
     if args.with_sim:
         ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))
         audio_rate = int(max([s.audio_rate for s in found.values() if s.has_audio],
                              default=NO_AUDIO_RATE))
+        parts = sim_parts(n=args.with_sim, seed=args.seed, ft_rate=ft_rate,
+                          audio_rate=audio_rate)
+        mixed = parts.get('mixed', {}).get('trials', 0)
         print(f'contact-detector train: {args.with_sim} simulated trials of '
-              f'{", ".join(SIM_CONDITIONS)} at {ft_rate:g} Hz F/T, {audio_rate} Hz audio')
-        if (sim_dir / 'manifest.json').exists():
-            print(f'contact-detector train: reusing {args.with_sim} simulated trials in '
-                  f'{sim_dir}')
-        sim_bags, sim_settings = simulated_trials(
+              f'{", ".join(SIM_CONDITIONS)} at {ft_rate:g} Hz F/T, {audio_rate} Hz audio: '
+              f"{args.with_sim - mixed} with each family's own events, {mixed} with any event "
+              'in every family')
+        sim = simulated_trials(
             sim_dir=sim_dir, n=args.with_sim, seed=args.seed, ft_rate=ft_rate,
             audio_rate=audio_rate,
-            progress=lambda trials: tqdm(trials, total=args.with_sim, desc='simulate',
-                                         unit='trial'))
-        found.update(discover_all(sim_bags, args=argparse.Namespace(
+            progress=lambda trials, count: tqdm(trials, total=count, desc='simulate',
+                                                unit='trial'))
+        for name in sim.reused:
+            print(f'contact-detector train: reusing {parts[name]["trials"]} simulated trials '
+                  f'in {sim_dir / name}')
+        found.update(discover_all(sim.bags, args=argparse.Namespace(
             wrench_topic=None, audio_topic=None, audio_rate=None, wrench_rate=None,
             audio_coding=None), params={}, prog='contact-detector train'))
     bags = list(found)
     manifest = conditions_of(bags)
     sources = training_sources(user=user_bags, csv_onsets=csv_onsets, labels_path=args.labels,
-                               sim=sim_bags, sim_settings=sim_settings, sim_dir=sim_dir,
+                               sim=sim, sim_dir=sim_dir,
                                kept=args.sim_dir is not None, manifest=manifest)
     bars = {}
 

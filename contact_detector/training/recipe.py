@@ -39,6 +39,7 @@ from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.rule import DecisionRule
 from contact_detector.sim.bag_writer import write_trials
+from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
 from contact_detector.training.protocol import (check_min_samples_leaf, LabelWindow, run_split,
@@ -72,49 +73,145 @@ DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.3)
 
 
-def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_rate: int,
-                     progress: Callable[[Iterable], Iterable] = iter) -> tuple[list, dict]:
+def sim_parts(*, n: int, seed: int, ft_rate: float, audio_rate: int) -> Dict[str, dict]:
     """
-    Write (or reuse) ``n`` simulated trials of :data:`SIM_CONDITIONS` in ``sim_dir``.
+    Return the manifest settings of each part of the ``n`` trials ``--with-sim`` adds.
 
-    ``progress`` wraps the iterator of trials being simulated (e.g. a progress bar).
+    The parts follow the shipped model's training set (``tools/build_model.sh``: 480 trials
+    with each family's own exogenous events, 120 with any event in every family):
+
+    - ``'family'``: ``n - m`` trials of :data:`SIM_CONDITIONS`, seed ``seed``, indices
+      ``0 .. n-m-1``, each family's own exogenous events (``simulate --events family``: knocks on
+      the hand or the table, touches, brushes and set-downs only in the ``exogenous`` family);
+    - ``'mixed'``: ``m = round(n / 5)`` trials (``(n + 2) // 5``: ``n / 5`` never ends in .5),
+      seed ``seed + 1``, indices ``n-m .. n-1`` (so every trial name is unique and the families
+      continue the first part's cycle), every exogenous event any of a knock on the hand or
+      the table, a touch, a brush or a set-down in every family (``simulate --events
+      everywhere --hits mixed``).
+
+    A part of no trials (``n < 3`` leaves ``'mixed'`` empty) is left out. Each part's settings
+    are those ``contact-detector simulate`` writes for the same trials, so the part's folder
+    is what ``simulate DIR --trials K --seed S --start-index I --conditions wide [--events
+    everywhere --hits mixed] --ft-rate F --audio-rate A`` makes.
+
+    Parameters
+    ----------
+    n : int
+        Simulated trials in all, >= 0.
+    seed : int
+        Seed of the first part; the second uses ``seed + 1``.
+    ft_rate : float
+        F/T rate of the trials, Hz.
+    audio_rate : int
+        Audio rate of the trials, Hz.
 
     Returns
     -------
-    (list of Path, dict)
-        The trial bags and the manifest's settings.
+    dict
+        Part name (its folder under ``--sim-dir``) -> settings.
+
+    """
+    mixed = (n + 2) // 5
+    common = {'conditions': list(resolve_conditions(SIM_CONDITIONS)), 'storage': 'sqlite3',
+              'audio_rate': audio_rate, 'ft_rate': ft_rate, 'chunk_size': None,
+              'label_window_s': 0.1}
+    parts = {'family': {'seed': seed, 'trials': n - mixed, 'start_index': 0, **common,
+                        'events': 'family', 'hits': None},
+             'mixed': {'seed': seed + 1, 'trials': mixed, 'start_index': n - mixed, **common,
+                       'events': 'everywhere', 'hits': 'mixed'}}
+    return {name: part for name, part in parts.items() if part['trials']}
+
+
+@dataclass
+class SimulatedSet:
+    """
+    What :func:`simulated_trials` returns.
+
+    Attributes
+    ----------
+    bags : list of Path
+        Every trial bag, the parts in the order of :func:`sim_parts`.
+    parts : dict
+        Part name -> the settings of its manifest (as held, for a reused part).
+    reused : tuple of str
+        The parts found in ``sim_dir`` and reused.
+
+    """
+
+    bags: list
+    parts: dict
+    reused: tuple
+
+
+def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_rate: int,
+                     progress: Callable[[Iterable, int], Iterable] = lambda trials, _n: trials
+                     ) -> SimulatedSet:
+    """
+    Write (or reuse) the ``n`` simulated trials of :func:`sim_parts` in ``sim_dir``.
+
+    Each part goes into its own folder, ``sim_dir/<part>/`` (bags and ``manifest.json``); a
+    part whose folder already holds its trials is reused. ``progress(trials, count)`` wraps
+    the iterator of each part's trials being simulated (e.g. a progress bar).
 
     Raises
     ------
     BagError
-        ``sim_dir`` holds other simulator output (other trials, seed or audio rate, or an F/T
-        rate more than 1 % away: one recording more or less moves the median a little).
+        ``sim_dir`` holds other simulator output: other trials, seeds, events or audio rate,
+        an F/T rate more than 1 % away (one recording more or less moves the median a little),
+        or trials made before ``--with-sim`` added the mixed part (a ``manifest.json`` in
+        ``sim_dir`` itself).
 
     """
-    settings = {'seed': seed, 'trials': n, 'start_index': 0,
-                'conditions': list(SIM_CONDITIONS), 'storage': 'sqlite3',
-                'audio_rate': audio_rate, 'ft_rate': ft_rate, 'chunk_size': None,
-                'label_window_s': 0.1}
-    manifest = sim_dir / 'manifest.json'
-    if manifest.exists():
-        held = json.loads(manifest.read_text())
-        have = dict(held.get('settings', {}))
-        same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
-        if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
-            raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
-                           'give an empty or new --sim-dir')
-        return [sim_dir / t['bag'] for t in held['trials']], held['settings']
-    trials = simulate_trials(n=n, seed=seed, conditions=SIM_CONDITIONS, audio_rate=audio_rate,
-                             ft_rate=ft_rate)
-    records, _ = write_trials(trials=progress(trials),
-                              out_dir=sim_dir, settings=settings)
-    return [sim_dir / r['bag'] for r in records], settings
+    if (sim_dir / 'manifest.json').exists():
+        held = json.loads((sim_dir / 'manifest.json').read_text())
+        raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
+                       'give an empty or new --sim-dir')
+    parts = sim_parts(n=n, seed=seed, ft_rate=ft_rate, audio_rate=audio_rate)
+    held = {}
+    for name, settings in parts.items():     # every part checked before any is simulated
+        manifest = sim_dir / name / 'manifest.json'
+        if manifest.exists():
+            held[name] = json.loads(manifest.read_text())
+            have = dict(held[name].get('settings', {}))
+            same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
+            if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
+                raise BagError(f'{sim_dir / name} holds other simulated trials '
+                               f'({held[name].get("settings")}); give an empty or new --sim-dir')
+    out = SimulatedSet(bags=[], parts={}, reused=tuple(held))
+    for name, settings in parts.items():
+        part_dir = sim_dir / name
+        if name in held:
+            out.bags += [part_dir / t['bag'] for t in held[name]['trials']]
+            out.parts[name] = held[name]['settings']
+            continue
+        trials = simulate_trials(n=settings['trials'], seed=settings['seed'],
+                                 conditions=settings['conditions'],
+                                 start_index=settings['start_index'], audio_rate=audio_rate,
+                                 ft_rate=ft_rate, events=settings['events'],
+                                 hits=settings['hits'])
+        records, _ = write_trials(trials=progress(trials, settings['trials']),
+                                  out_dir=part_dir, settings=settings)
+        out.bags += [part_dir / r['bag'] for r in records]
+        out.parts[name] = settings
+    return out
+
+
+def _event_counts(entries: Iterable[dict]) -> dict:
+    """Count the exogenous events (knocks, touches, brushes, set-downs) of manifest entries."""
+    return dict(sorted(Counter(i['kind'] for e in entries for i in e.get('impacts', ())
+                               ).items()))
 
 
 def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
-                     labels_path: Optional[Path], sim: Sequence[Path], sim_settings: dict,
+                     labels_path: Optional[Path], sim: Optional[SimulatedSet],
                      sim_dir: Optional[Path], kept: bool, manifest: dict) -> dict:
-    """Return what the model was trained on, for the model card (``training.sources``)."""
+    """
+    Return what the model was trained on, for the model card (``training.sources``).
+
+    ``sources['simulated']['parts']`` says, for each part of :func:`sim_parts`, its trials,
+    seed, events and hits (``simulate``'s ``--events`` and ``--hits``; None: each family's
+    cycle), families and exogenous events (counted like ``training.exogenous_events``).
+    """
     sources = {}
     if user:
         contacts = sum(len(csv_onsets[b.name]) for b in user) if csv_onsets else len(user)
@@ -122,12 +219,21 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
             'count': len(user), 'contacts': contacts, 'bags': sorted(b.name for b in user),
             'labels': f'{labels_path.name} (--labels)' if labels_path else
             'the /contact_truth topic or the simulator manifest of each bag'}
-    if sim:
+    if sim is not None and sim.bags:
+        first = next(iter(sim.parts.values()))
+        parts = {}
+        for name, settings in sim.parts.items():
+            entries = [manifest.get(b, {}) for b in sim.bags if b.parent.name == name]
+            parts[name] = {'trials': len(entries), 'seed': settings['seed'],
+                           'start_index': settings['start_index'],
+                           'events': settings['events'], 'hits': settings['hits'],
+                           'families': sorted({e.get('condition', '') for e in entries}),
+                           'exogenous_events': _event_counts(entries)}
         sources['simulated'] = {
-            'trials': len(sim),
-            'families': sorted({manifest.get(b, {}).get('condition', '') for b in sim}),
-            'seed': sim_settings['seed'], 'ft_rate': sim_settings['ft_rate'],
-            'audio_rate': sim_settings['audio_rate'],
+            'trials': len(sim.bags),
+            'families': sorted({manifest.get(b, {}).get('condition', '') for b in sim.bags}),
+            'seed': first['seed'], 'ft_rate': first['ft_rate'],
+            'audio_rate': first['audio_rate'], 'parts': parts,
             'labels': 'simulator truth (/contact_truth)',
             'kept_in': str(sim_dir) if kept else 'a temporary directory (deleted)'}
     return sources
@@ -300,9 +406,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 'conditions': sorted({t.condition for t in trials}),
                 # which knocks, touches, brushes and set-downs the forest was shown (from the
                 # simulator's manifests; recorded bags add none)
-                'exogenous_events': dict(sorted(Counter(
-                    i['kind'] for b in bags for i in manifest.get(b, {}).get('impacts', ())
-                ).items())),
+                'exogenous_events': _event_counts(manifest.get(b, {}) for b in bags),
                 'test_trials': quoted.test_trials, 'seed': seed,
                 'min_samples_leaf': min_samples_leaf,
                 'augmentation': augmentation.to_dict() if augmentation else None,

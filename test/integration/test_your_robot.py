@@ -25,6 +25,7 @@ import subprocess
 import sys
 
 from contact_detector.cli import evaluate as evaluate_cli
+from contact_detector.cli import simulate as simulate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
 from contact_detector.model.storage import load_bundle
@@ -127,34 +128,85 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
     model = tmp_path / 'mine.npz'
     args = [str(recordings['bags']), '--labels', str(labels), '--trees', '2', '--jobs', '1',
             '--out', str(model)]
-    assert train_cli.main([*args, '--with-sim', '3', '--sim-dir', str(sim)]) == 0
+    assert train_cli.main([*args, '--with-sim', '8', '--sim-dir', str(sim)]) == 0
+    assert ("8 simulated trials of wide at 125 Hz F/T, 16000 Hz audio: 6 with each family's "
+            'own events, 2 with any event in every family') in capsys.readouterr().out
     sources = load_bundle(path=model).training['sources']
     assert sources['recordings'] == {'count': 3, 'contacts': 3,
                                      'bags': sorted(recordings['onsets']),
                                      'labels': 'l.csv (--labels)'}
-    assert sources['simulated']['trials'] == 3 and sources['simulated']['kept_in'] == str(sim)
-    assert len(sources['simulated']['families']) == 3         # wide: one family per trial
-    assert sources['simulated']['ft_rate'] == 125.0
+    simulated = sources['simulated']
+    assert simulated['trials'] == 8 and simulated['kept_in'] == str(sim)
+    assert len(simulated['families']) == 8        # wide: the parts continue one family cycle
+    assert simulated['ft_rate'] == 125.0
     card = json.loads(model.with_name('mine.card.json').read_text())
     assert card['training']['sources'] == sources
-    assert load_bundle(path=model).training['trials'] == 6
+    assert load_bundle(path=model).training['trials'] == 11
+    # As the shipped model: 4/5 with each family's own events (brushes, touches and
+    # set-downs only in 'exogenous'), 1/5 with any event in every family, seed + 1.
+    family, mixed = simulated['parts']['family'], simulated['parts']['mixed']
+    assert (family['trials'], family['seed'], family['events'], family['hits']) == (
+        6, 0, 'family', None)
+    assert (mixed['trials'], mixed['seed'], mixed['events'], mixed['hits']) == (
+        2, 1, 'everywhere', 'mixed')
+    held = {part: json.loads((sim / part / 'manifest.json').read_text())['trials']
+            for part in ('family', 'mixed')}
+    assert mixed['families'] == sorted(t['condition'] for t in held['mixed'])
+    assert len(mixed['families']) == 2 and 'exogenous' not in mixed['families']
+    # ... so the forest is shown brushes, touches or set-downs outside the exogenous family,
+    # which the family part alone never has.
+    kinds = {t['condition']: {i['kind'] for i in t['impacts']} for t in held['mixed']}
+    assert any(k & {'touch', 'brush', 'setdown'} for k in kinds.values())
+    assert not any({i['kind'] for i in t['impacts']} & {'touch', 'brush', 'setdown'}
+                   for t in held['family'] if t['condition'] != 'exogenous')
+    for part in ('family', 'mixed'):
+        counted = [i['kind'] for t in held[part] for i in t['impacts']]
+        assert simulated['parts'][part]['exogenous_events'] == {
+            k: counted.count(k) for k in counted}
     # the card says which exogenous events the forest was shown: the simulated trials' ones
-    held = json.loads((sim / 'manifest.json').read_text())['trials']
-    kinds = [i['kind'] for t in held for i in t['impacts']]
+    kinds = [i['kind'] for part in held.values() for t in part for i in t['impacts']]
     assert kinds and card['training']['exogenous_events'] == {k: kinds.count(k) for k in kinds}
-    assert sorted(p.name for p in sim.glob('trial_*')) == [f'trial_000{i}' for i in range(3)]
+    assert sorted(p.name for p in (sim / 'family').glob('trial_*')) == [
+        f'trial_000{i}' for i in range(6)]
+    assert sorted(p.name for p in (sim / 'mixed').glob('trial_*')) == [
+        'trial_0006', 'trial_0007']
+    # each part is what `simulate` writes for the same settings (docs/your-robot.md)
+    same = tmp_path / 'same'
+    assert simulate_cli.main([str(same), '--trials', '2', '--seed', '1', '--start-index', '6',
+                              '--conditions', 'wide', '--events', 'everywhere', '--hits',
+                              'mixed', '--ft-rate', '125', '--quiet']) == 0
+    assert (json.loads((same / 'manifest.json').read_text())
+            == json.loads((sim / 'mixed' / 'manifest.json').read_text()))
     capsys.readouterr()
     # The kept trials are reused; a folder holding other trials is refused.
     # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same)
-    manifest = json.loads((sim / 'manifest.json').read_text())
-    manifest['settings']['ft_rate'] = 124.6
-    (sim / 'manifest.json').write_text(json.dumps(manifest))
-    assert train_cli.main([*args, '--with-sim', '3', '--sim-dir', str(sim),
+    for part in ('family', 'mixed'):
+        manifest = json.loads((sim / part / 'manifest.json').read_text())
+        manifest['settings']['ft_rate'] = 124.6
+        (sim / part / 'manifest.json').write_text(json.dumps(manifest))
+    assert train_cli.main([*args, '--with-sim', '8', '--sim-dir', str(sim),
                            '--no-events']) == 0
-    assert 'reusing 3 simulated trials' in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert 'reusing 6 simulated trials' in out and 'reusing 2 simulated trials' in out
     assert load_bundle(path=model).training['sources']['simulated']['ft_rate'] == 124.6
-    assert train_cli.main([*args, '--with-sim', '4', '--sim-dir', str(sim)]) == 1
+    assert train_cli.main([*args, '--with-sim', '9', '--sim-dir', str(sim)]) == 1
     assert 'holds other simulated trials' in capsys.readouterr().err
+    # trials with other events (here: each family's own in the mixed part) are refused too
+    manifest = json.loads((sim / 'mixed' / 'manifest.json').read_text())
+    manifest['settings'].update(events='family', hits=None)
+    (sim / 'mixed' / 'manifest.json').write_text(json.dumps(manifest))
+    assert train_cli.main([*args, '--with-sim', '8', '--sim-dir', str(sim)]) == 1
+    assert 'holds other simulated trials' in capsys.readouterr().err
+    # ... and so is a folder of trials made before --with-sim added the mixed part (all with
+    # each family's own events, one manifest in the folder itself)
+    old = tmp_path / 'old_sim'
+    old.mkdir()
+    (old / 'manifest.json').write_text(json.dumps({'settings': {
+        'seed': 0, 'trials': 8, 'start_index': 0, 'conditions': ['wide'],
+        'storage': 'sqlite3', 'audio_rate': 16000, 'ft_rate': 125.0, 'chunk_size': None,
+        'label_window_s': 0.1}, 'trials': []}))
+    assert train_cli.main([*args, '--with-sim', '8', '--sim-dir', str(old)]) == 1
+    assert f'{old} holds other simulated trials' in capsys.readouterr().err
     # Alone: the recordings only, and a temporary folder leaves nothing behind.
     assert train_cli.main([*args, '--no-events']) == 0
     assert set(load_bundle(path=model).training['sources']) == {'recordings'}
