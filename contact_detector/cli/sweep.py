@@ -254,7 +254,11 @@ def with_model(args) -> str:
     own_name = f'{args.own_test} (own test trials)'
     if args.own_test is not None:
         test = set(bundle.training.get('test_trials', []))
-        own = [b for b in find_bags([args.own_test]) if b.name in test or f'sim/{b.name}' in test]
+        # the card names a test trial by its bag, or by folder and bag where two bags share a
+        # name (training.recipe), with sim/ for simulated trials
+        own = [b for b in find_bags([args.own_test])
+               if test & {b.name, f'sim/{b.name}', f'{b.parent.name}/{b.name}',
+                          f'sim/{b.parent.name}/{b.name}'}]
         folders.insert(0, (own_name, own))
     found, audio_rate, wrench_rate = discover(folders, args,
                                               allow_no_audio=bundle.feature_config.ft_only)

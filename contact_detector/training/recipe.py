@@ -202,6 +202,22 @@ def _event_counts(entries: Iterable[dict]) -> dict:
                                ).items()))
 
 
+def _trial_names(*, bags: Sequence[Path], user: set) -> list:
+    """
+    Name each bag for the split and the card's ``test_trials``, one name per bag.
+
+    Simulated trials (``--with-sim``) get ``sim/``. A name that two bags would share (a
+    recording and a simulated trial, or two folders of trials that both start at
+    ``trial_0000``, as ``tools/build_model.sh`` trains) is prefixed with the bag's folder, so
+    the card names each test trial once and the events on the test trials are scored on
+    test trials only.
+    """
+    base = [b.name if b in user else f'sim/{b.name}' for b in bags]
+    shared = {n for n, count in Counter(base).items() if count > 1}
+    return [(f'{b.parent.name}/{b.name}' if b in user else f'sim/{b.parent.name}/{b.name}')
+            if n in shared else n for b, n in zip(bags, base)]
+
+
 def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
                      labels_path: Optional[Path], sim: Optional[SimulatedSet],
                      sim_dir: Optional[Path], kept: bool, manifest: dict) -> dict:
@@ -388,8 +404,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     x = np.concatenate([t.x for t in trials])
     y = np.concatenate([t.y for t in trials])
     groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
-    # Names tell the trials apart in the split: a recording and a trial may share one.
-    names = [t.name if b in user else f'sim/{t.name}' for b, t in zip(bags, trials)]
+    names = _trial_names(bags=bags, user=user)
     log(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
     results = {}
     for kind in ('sample', 'trial'):

@@ -244,3 +244,23 @@ def test_labels_from_a_topic_and_a_recording_cut_per_contact(recordings, tmp_pat
     assert (out / 'labels.csv').read_text().splitlines()[1:] == [
         f'{stem}_c1.bag,{onset - 3.0:.6f},{onset - 3.0:.6f}',
         f'{stem}_c2.bag,{onset:.6f},{onset:.6f}']
+
+
+def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys):
+    # tools/build_model.sh trains on two folders that both start at trial_0000
+    folders = [tmp_path / 'train', tmp_path / 'train_extra']
+    for seed, folder in enumerate(folders):
+        assert simulate_cli.main([str(folder), '--trials', '5', '--seed', str(20 + seed),
+                                  '--conditions', 'paper', '--quiet']) == 0
+    model = tmp_path / 'both.npz'
+    assert train_cli.main([*map(str, folders), '--trees', '2', '--jobs', '1',
+                           '--out', str(model)]) == 0
+    printed = capsys.readouterr().out
+    test_trials = load_bundle(path=model).training['test_trials']
+    bags = [f'{folder.name}/{bag.name}' for folder in folders for bag in folder.iterdir()
+            if bag.name.startswith('trial_')]
+    # each name in the card is one bag: with both folders' trial_0000 ... the bare name is
+    # shared, so the folder is part of it
+    assert test_trials and set(test_trials) <= set(bags)
+    scored = json.loads(printed.split('events on test trials:', 1)[1].splitlines()[0])
+    assert scored['trials'] == len(test_trials)
