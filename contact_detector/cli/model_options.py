@@ -77,6 +77,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help='label window start after the onset, s')
     parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
                         help='label window end after the onset, s')
+    parser.add_argument('--label-ignore', type=float, default=DEFAULT_LABELS.ignore_s,
+                        metavar='S', help='leave the frames up to S s after the label window '
+                        'out of training (default %(default)s: labelled no contact)')
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)

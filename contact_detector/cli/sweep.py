@@ -149,6 +149,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo-label-end', type=float, default=STATE.end_s,
                         help='--lofo: frames up to this long after the onset are labelled '
                              f'contact, s (default {STATE.end_s})')
+    parser.add_argument('--lofo-label-ignore', type=float, default=0.0, metavar='S',
+                        help='--lofo: leave the frames up to S s after the label window out '
+                             'of training (default 0: they are labelled no contact)')
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
@@ -201,7 +204,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             output = lofo_study(
                 trials=trials, settings=args.lofo_settings.split(','),
                 label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
-                label_start_s=args.lofo_label_start, seeds=args.seeds or (),
+                label_start_s=args.lofo_label_start, label_ignore_s=args.lofo_label_ignore,
+                seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
                 families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
                 jobs=args.jobs, progress=lambda items: tqdm(items, desc='lofo', unit='setting'))

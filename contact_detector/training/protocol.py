@@ -46,15 +46,49 @@ class LabelWindow:
     Frames labelled *contact*: those ending in ``[onset + start_s, onset + end_s)``.
 
     The paper labels the first instants of the contact (about 0.1 s); a longer window labels
-    the contact *state* after the onset.
+    the contact *state* after the onset. Frames ending in ``[onset + end_s, onset + end_s +
+    ignore_s)`` are left out of training (``ignore_s`` > 0): the object resting on the table
+    after the window is then not taught as *no contact*, so a forest that misses the first
+    frames of a contact is not trained to call the rest of it no contact either.
     """
 
     start_s: float = 0.0
     end_s: float = 0.1
+    ignore_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuse a negative or non-finite ``ignore_s`` (:class:`ConfigError`)."""
+        if isinstance(self.ignore_s, bool) or not isinstance(self.ignore_s, (int, float)) \
+                or not np.isfinite(self.ignore_s) or self.ignore_s < 0:
+            raise ConfigError(f'LabelWindow.ignore_s must be a finite number >= 0 s, got '
+                              f'{self.ignore_s!r}')
 
     def to_dict(self) -> dict:
-        """Plain-JSON form, stored in the model bundle."""
-        return {'start_s': self.start_s, 'end_s': self.end_s}
+        """Plain-JSON form, stored in the model bundle (``ignore_s`` only when > 0)."""
+        out = {'start_s': self.start_s, 'end_s': self.end_s}
+        return {**out, 'ignore_s': self.ignore_s} if self.ignore_s > 0 else out
+
+    def trained(self, *, t: np.ndarray, onsets: Sequence[float]) -> np.ndarray:
+        """
+        Return which frames a forest is trained on: all but those ``ignore_s`` after the window.
+
+        Parameters
+        ----------
+        t : np.ndarray, shape (n,)
+            Frame times (last sample), s.
+        onsets : sequence of float
+            True onsets, s.
+
+        Returns
+        -------
+        np.ndarray, shape (n,), bool
+            False for frames ending in ``[onset + end_s, onset + end_s + ignore_s)``.
+
+        """
+        keep = np.ones(t.shape[0], dtype=bool)
+        for onset in onsets:
+            keep &= ~((t >= onset + self.end_s) & (t < onset + self.end_s + self.ignore_s))
+        return keep
 
 
 @dataclass
@@ -117,8 +151,9 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
     t = frames.t[keep]
     y = frame_labels(t=t, onsets=onsets, start_s=label_window.start_s,
                      end_s=label_window.end_s)
-    return TrialData(name=Path(bag).name, condition=condition, t=t, x=frames.x[keep], y=y,
-                     onsets=list(onsets))
+    trained = label_window.trained(t=t, onsets=onsets)
+    return TrialData(name=Path(bag).name, condition=condition, t=t[trained],
+                     x=frames.x[keep][trained], y=y[trained], onsets=list(onsets))
 
 
 def read_labels_csv(path: Path) -> Dict[str, List[float]]:

@@ -219,7 +219,7 @@ def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
 
 def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
-               label_start_s: float = 0.0,
+               label_start_s: float = 0.0, label_ignore_s: float = 0.0,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
                seeds: Sequence[int] = (), min_samples_leaf: int = 1,
                families: Optional[Sequence[str]] = None,
@@ -239,9 +239,11 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     every fold trains one forest per seed and each family's row pools the outcomes of all of
     them (``n`` trials x ``len(seeds)``), so that two settings are not told apart by one
     forest's randomness; else one forest of ``seed``. Every forest has ``trees`` trees and
-    ``min_samples_leaf`` (1: fully grown, the paper's). ``families`` leaves only those
-    families out in turn (every forest still trains on all the others; default: every family,
-    the figure to choose by); a name no trial has raises ConfigError. Returns markdown.
+    ``min_samples_leaf`` (1: fully grown, the paper's); frames up to ``label_ignore_s`` after
+    the label window are left out of their training (:class:`~.protocol.LabelWindow`).
+    ``families`` leaves only those families out in turn (every forest still trains on all the
+    others; default: every family, the figure to choose by); a name no trial has raises
+    ConfigError. Returns markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
     present = {events_truth[1].condition for events_truth in trials.values()}
@@ -273,8 +275,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
         base = name.removesuffix(AUGMENTED)
         columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
         config = replace(full, **LOFO_CONFIG_CHANGES.get(base, {}))
-        setting = FeatureSetting(name, config, LabelWindow(label_start_s, label_end_s),
-                                 columns=tuple(columns))
+        window = LabelWindow(label_start_s, label_end_s, label_ignore_s)
+        setting = FeatureSetting(name, config, window, columns=tuple(columns))
         frames = frames_of(config, False)
         knocked = {}
         for f in frames:

@@ -196,10 +196,11 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1.
     """
     cols = _columns(setting)
-    x = np.concatenate([f.x[:, cols] for f in frames])
-    y = np.concatenate([frame_labels(t=f.t, onsets=[f.truth.onset_t],
+    trained = [setting.label.trained(t=f.t, onsets=[f.truth.onset_t]) for f in frames]
+    x = np.concatenate([f.x[keep][:, cols] for f, keep in zip(frames, trained)])
+    y = np.concatenate([frame_labels(t=f.t[keep], onsets=[f.truth.onset_t],
                                      start_s=setting.label.start_s, end_s=setting.label.end_s)
-                        for f in frames])
+                        for f, keep in zip(frames, trained)])
     forest = make_forest(n_estimators=n_estimators, seed=seed, jobs=jobs,
                          min_samples_leaf=min_samples_leaf)
     return forest.fit(x, y)

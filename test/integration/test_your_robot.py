@@ -264,3 +264,23 @@ def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys):
     assert test_trials and set(test_trials) <= set(bags)
     scored = json.loads(printed.split('events on test trials:', 1)[1].splitlines()[0])
     assert scored['trials'] == len(test_trials)
+
+
+def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tmp_path):
+    bags = tmp_path / 'trials'
+    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', '30', '--conditions',
+                              'paper', '--quiet']) == 0
+    cards = {}
+    for ignore in ('0', '0.2'):
+        model = tmp_path / f'ignore{ignore}.npz'
+        assert train_cli.main([str(bags), '--trees', '2', '--jobs', '1', '--no-events',
+                               '--label-ignore', ignore, '--out', str(model)]) == 0
+        cards[ignore] = load_bundle(path=model)
+    assert cards['0'].label_window == {'start_s': 0.0, 'end_s': 0.3}
+    assert cards['0.2'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'ignore_s': 0.2}
+    # 0.2 s of 10 ms audio frames, 0.3-0.5 s after each of the 6 onsets, are not trained on
+    dropped = cards['0'].training['frames'] - cards['0.2'].training['frames']
+    assert 6 * 19 <= dropped <= 6 * 21
+    assert cards['0'].training['contact_frames'] == cards['0.2'].training['contact_frames']
+    assert train_cli.main([str(bags), '--label-ignore', '-1', '--out',
+                           str(tmp_path / 'bad.npz')]) == 1
