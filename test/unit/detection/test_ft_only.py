@@ -197,6 +197,13 @@ def test_off_the_grid_rates_release_at_the_sample_that_decided(bundle, rate):
     assert blocks.releases == single.releases and len(blocks.releases) == 1
     assert np.all(np.isin(single.t, t)) and single.releases[0] in t
     assert T0 + STEP_S <= single.releases[0] <= T0 + STEP_S + 0.3
+    # the node's calls: one sample per on_wrench_one; its release log and age use these times
+    node = _detector(bundle, **settings)
+    decided = [node.on_wrench_one(t=float(e.t[0]), values=[*e.force[0], *e.torque[0]],
+                                  now=e.now) if isinstance(e, WrenchEvent)
+               else node.on_audio(e.samples, stamp=e.stamp, now=e.now) for e in events]
+    assert np.array_equal(np.concatenate([d.t for d in decided]), single.t)
+    assert [r for d in decided for r in d.releases] == single.releases
 
 
 def test_warmup_applies_from_the_first_ft_frame(bundle):
