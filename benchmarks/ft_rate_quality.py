@@ -17,7 +17,7 @@ Detection quality of the shipped models at each F/T rate: the same trials at eve
 
     .venv/bin/python benchmarks/ft_rate_quality.py OUT_DIR [--rates 100,51,125,200,500,1000]
         [--trials 120] [--seed 4545] [--quiet-rates 100,200] [--quiet-trials 48]
-        [--quiet-seed 4546]
+        [--quiet-seed 4546] [--jobs 2]
 
 For every rate R it runs the commands a user types (as ``python -m contact_detector.cli.main``):
 
@@ -30,7 +30,7 @@ For every rate R it runs the commands a user types (as ``python -m contact_detec
   OUT_DIR/eval_rR`` (the multimodal and the F/T-only shipped models; the rate is measured
   from the stamps);
 - ``contact-detector sweep OUT_DIR/rR --model models/contact_forest_ft.npz --knocks
-  --wrench-rate R --out OUT_DIR/sweep_rR.md`` (the F/T-only model's own rule on the trials
+  --wrench-rate R --out OUT_DIR/sweep_rR.md --jobs J`` (the F/T-only model's own rule on the trials
   with a knock on the hand in the air; ``sweep`` measures the rate as ``evaluate`` does,
   ``--wrench-rate`` gives it the rate simulated all the same);
 
@@ -40,11 +40,11 @@ and with ``--quiet-rates`` the multimodal model on ``--conditions quiet_contact`
 It prints, per rate and model: caught within 500 ms (``detected``), early (premature), missed
 or late, latency median and p95 (ms), and the median of the per-trial latency difference to
 the first rate over the trials caught at both (paired: the noise of a median over different
-trials left out). For the F/T-only model it also gives the median time from a release's frame
-to the stamp of the wrench sample that completed that frame: a frame on the resampler's grid
-(a rate that is no integer multiple of 100 Hz) is timed at its grid point ``g_j`` but computed
-when the first sample at or after ``g_j`` arrives, so its latency is counted from before the
-data that decided it (0 at 100, 200, 500, 1000 Hz). Then how far ``force_change`` at each rate
+trials left out). For the F/T-only model it also gives the median (and largest) time from a
+release's frame to the stamp of the first wrench sample at or after it: a check that the
+frame is timed at the sample that completed it (0; a frame on the resampler's grid, at a rate
+that is no integer multiple of 100 Hz, is computed when the first sample at or after its grid
+point arrives, and is timed there, docs/features.md). Then how far ``force_change`` at each rate
 lags the first rate's around the onset, on the F/T-only model's F/T frames and on the
 multimodal model's audio frames (:func:`feature_lag`), and, per family, the rows where a rate's
 caught or early count differs from the first rate's or its paired shift exceeds 10 ms.
@@ -171,6 +171,7 @@ def main(argv=None) -> int:
     parser.add_argument('--quiet-rates', default='100,200')
     parser.add_argument('--quiet-trials', type=int, default=48)
     parser.add_argument('--quiet-seed', type=int, default=4546)
+    parser.add_argument('--jobs', type=int, default=2, help='processes of sweep (default 2)')
     args = parser.parse_args(argv)
     rates = [r for r in args.rates.split(',') if r]
     quiet = [r for r in args.quiet_rates.split(',') if r]
@@ -203,7 +204,7 @@ def main(argv=None) -> int:
         step(f'sweep --knocks r{rate}')
         out = args.out / f'sweep_r{rate}.md'
         run('sweep', args.out / f'r{rate}', '--model', FT_MODEL, '--knocks', '--wrench-rate',
-            rate, '--out', out)
+            rate, '--out', out, '--jobs', args.jobs)
         knocks[rate] = knock_row(out)
     step('feature lag')
     folders = [(float(r), args.out / f'r{r}') for r in rates]

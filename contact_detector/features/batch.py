@@ -109,7 +109,9 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     Returns
     -------
     t : np.ndarray, shape (m,)
-        Time of each feature frame's last sample.
+        Time of each feature frame's last sample: of the last input sample of its block, or
+        on the interpolating path its grid time, for an F/T-only configuration the stamp of
+        the input sample that completed it.
     x : np.ndarray, shape (m, n_columns)
     columns : tuple of str
 
@@ -122,7 +124,8 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
         dec_t = np.array([ft_t[b * m + m - 1] for b in range(n_blocks)])
         dec = np.array([values[b * m:(b + 1) * m].mean(axis=0) for b in range(n_blocks)])
     else:
-        dec_t, dec = WrenchResampler(input_rate=rate, output_rate=config.ft_rate_hz).push(
+        dec_t, dec = WrenchResampler(input_rate=rate, output_rate=config.ft_rate_hz,
+                                     at_completion=config.ft_only).push(
             t=np.asarray(ft_t, dtype=np.float64), values=values)
         n_blocks = len(dec_t)
     if n_blocks == 0:
@@ -222,7 +225,8 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
     Each audio frame ending at ``t_a`` takes the newest F/T feature frame ending at or before
     ``t_a``; the row is invalid (zeros in the F/T columns) if there is none or it is older than
     ``max_ft_age_s`` (default ``ft_hop / ft_rate_hz + 0.05``). With an F/T-only configuration
-    (``config.audio`` False) every F/T feature frame is one valid row and the audio is unused.
+    (``config.audio`` False) every F/T feature frame is one valid row, timed at the stamp of
+    the wrench sample that completed it, and the audio is unused.
 
     Parameters
     ----------

@@ -51,7 +51,10 @@ class ForceTorqueStream:
     averaged over blocks of M samples timed at their last sample; any other rate from 50 Hz to
     10 kHz is box-filtered and interpolated). A feature frame ends at every
     ``ft_hop``-th decimated sample once ``ft_window`` samples (and the delta history) are
-    there; its time is the time of its last sample.
+    there; its time is the time of its last sample: its grid time, or, for an F/T-only
+    configuration (``config.ft_only``: the frames are the rows, clocked by this stream), the
+    stamp of the wrench sample that completed it (``at_completion`` of the resampler; the same
+    on the block-mean path), so a row is never timed before the data that decided it.
 
     Parameters
     ----------
@@ -69,7 +72,8 @@ class ForceTorqueStream:
 
     def __init__(self, *, config: FeatureConfig, input_rate: float,
                  gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
-        self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz)
+        self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz,
+                                          at_completion=config.ft_only)
         self.config = config
         self.input_rate = float(input_rate)
         self.decimation = self._resampler.block     # 0: not an integer ratio (interpolated)
@@ -183,7 +187,8 @@ class ForceTorqueStream:
         Returns
         -------
         t_frames : np.ndarray, shape (m,)
-            Time of each feature frame's last sample.
+            Time of each feature frame's last sample (class docstring: its grid time, or
+            for an F/T-only configuration the stamp of the sample that completed it).
         features : np.ndarray, shape (m, len(self.columns))
 
         """
@@ -218,11 +223,14 @@ class ForceTorqueStream:
             return np.zeros(0), np.zeros((0, len(self.columns)))
         return np.concatenate(out_t), np.concatenate(out_f)
 
-    def push_one(self, *, t: float, values: Sequence[float]) -> Optional[tuple[float, list]]:
+    def push_one(self, *, t: float,
+                 values: Sequence[float]) -> Optional[tuple[np.ndarray, np.ndarray]]:
         """
-        Add one wrench sample (a live message); return the feature frame it completes, if any.
+        Add one wrench sample (a live message); return the feature frames it completes, if any.
 
-        :meth:`push` with one sample: the same code, so the same numbers.
+        :meth:`push` with one sample: the same code, so the same numbers. A sample completes
+        two frames at times where the input is slower than the grid (50, 51 Hz); both are
+        returned.
 
         Parameters
         ----------
@@ -233,14 +241,15 @@ class ForceTorqueStream:
 
         Returns
         -------
-        (float, list of float) or None
-            The frame's time and its features (``self.columns``), or None.
+        (np.ndarray, np.ndarray) or None
+            The frames' times, shape (m,), and features, shape (m, len(self.columns)); None
+            when the sample completes none.
 
         """
         row = np.array([values], dtype=np.float64)
         ft_t, ft_x = self.push(t=np.array([t], dtype=np.float64), force=row[:, :3],
                                torque=row[:, 3:])
-        return (float(ft_t[0]), ft_x[0].tolist()) if ft_t.size else None
+        return (ft_t, ft_x) if ft_t.size else None
 
     def _change_max(self, change: np.ndarray) -> np.ndarray:
         # *_change_max of the (m, 2) new changes; keeps the newest ones for the next call.

@@ -34,7 +34,14 @@ samples into feature-grid samples, causally and with bounded memory:
   ``y_j = x~(g_j)`` otherwise. ``g_0 = t_0 + W`` (the first sample after a restart).
 
   ``y_j`` needs ``x~`` up to ``g_j``: it is emitted when the first sample at or after ``g_j``
-  arrives, one input period late at most; nothing later is used.
+  arrives (its *completing sample*, stamp ``c_j >= g_j``), one input step late at most;
+  nothing later than ``c_j`` is used.
+
+Times: each output is timed at its grid point ``g_j`` (the block path: the block's last
+stamp), or, with ``at_completion``, at ``c_j``, the stamp of the sample that completed it
+(the block path: the block's last stamp again, so nothing changes there). The values are the
+same either way. Frames clocked by the F/T stream (an F/T-only model) use ``c_j``: a decision
+is never timed before the data that decided it existed.
 
 Stamps are the header stamps (seconds); a stream restart (a gap, a time jump) is a
 :meth:`WrenchResampler.reset`.
@@ -75,6 +82,9 @@ class WrenchResampler:
         Wrench rate, Hz, in [MIN_INPUT_RATE, MAX_INPUT_RATE] (1 % slack for measured rates).
     output_rate : float
         Feature grid rate ``ft_rate_hz``, Hz.
+    at_completion : bool
+        Time each output at the stamp of the input sample that completed it (``c_j``) instead
+        of its grid point (``g_j``); only the interpolating path differs.
 
     Attributes
     ----------
@@ -88,7 +98,8 @@ class WrenchResampler:
 
     """
 
-    def __init__(self, *, input_rate: float, output_rate: float) -> None:
+    def __init__(self, *, input_rate: float, output_rate: float,
+                 at_completion: bool = False) -> None:
         slack = 1.0 + INTEGER_TOLERANCE        # a measured 10 kHz may read 10010 Hz
         if not (math.isfinite(input_rate)
                 and MIN_INPUT_RATE / slack <= input_rate <= MAX_INPUT_RATE * slack):
@@ -101,6 +112,7 @@ class WrenchResampler:
         self.block = integer_ratio(input_rate=input_rate, output_rate=output_rate)
         self.period = 1.0 / self.output_rate
         self.width = self.period if input_rate > output_rate else 0.0
+        self.at_completion = bool(at_completion)
         self.reset()
 
     def reset(self) -> None:
@@ -124,7 +136,8 @@ class WrenchResampler:
         Returns
         -------
         t_out : np.ndarray, shape (m,)
-            Grid times, s (block path: each block's last stamp).
+            Grid times ``g_j``, s, or with ``at_completion`` the completing samples' stamps
+            ``c_j`` (block path: each block's last stamp, either way).
         v_out : np.ndarray, shape (m, 6)
 
         """
@@ -157,8 +170,17 @@ class WrenchResampler:
         if last < self._next:
             self._t, self._v = ts, xs
             return np.zeros(0), np.zeros((0, 6))
-        grid = g0 + np.arange(self._next, last + 1) * period
-        grid = np.minimum(grid, ts[-1])         # the 1e-9 slack above: never past the data
+        index = np.arange(self._next, last + 1)
+        grid = g0 + index * period
+        # The sample completing grid point j: the first whose floor index above reaches j.
+        # Only new samples can (the ones kept complete nothing beyond self._next - 1); the
+        # floor is monotonic in t, so searchsorted finds it; one sample completes them all.
+        if t.size == 1:
+            done = np.full(index.size, ts[-1])
+        else:
+            reached = np.floor((t - g0) / period + 1e-9)
+            done = t[np.searchsorted(reached, index, side='left')]
+        grid = np.minimum(grid, done)       # the 1e-9 slack above: never past that sample
         if width > 0.0:
             out = (self._integral(ts, xs, grid) - self._integral(ts, xs, grid - width)) / width
         else:
@@ -168,7 +190,7 @@ class WrenchResampler:
         start = g0 + self._next * period - width
         keep = max(int(np.searchsorted(ts, start, side='right')) - 1, 0)
         self._t, self._v = ts[keep:], xs[keep:]
-        return grid, out
+        return (done if self.at_completion else grid), out
 
     @staticmethod
     def _segments(ts: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -54,8 +54,10 @@ class StreamingFeatureExtractor:
 
     With an F/T-only configuration (``config.audio`` False) the rows are clocked by the F/T
     stream instead: every F/T feature frame is one row, emitted by the wrench sample that
-    completes it, at that sample's time, always valid (its features are fresh by
-    construction). Audio chunks are then ignored (:attr:`ignored_audio` counts them).
+    completes it, at that sample's stamp (also where the wrench is resampled onto a grid
+    point before that stamp, :mod:`~contact_detector.features.resample`), always valid (its
+    features are fresh by construction). Audio chunks are then ignored (:attr:`ignored_audio`
+    counts them).
 
     Parameters
     ----------
@@ -246,14 +248,12 @@ class StreamingFeatureExtractor:
         isfinite = math.isfinite
         if not (isfinite(t) and all(map(isfinite, values))):
             raise InputError('wrench contains NaN or Inf')
-        frame = self.ft.push_one(t=t, values=values)
+        frames = self.ft.push_one(t=t, values=values)
         if self.ft_only:
-            if frame is None:
-                return self._empty
-            return self.ft_rows(np.array([frame[0]]), np.array([frame[1]]))
-        if frame is not None:
-            self._ft_ts.append(frame[0])
-            self._ft_xs.append(frame[1])
+            return self._empty if frames is None else self.ft_rows(*frames)
+        if frames is not None:
+            self._ft_ts.extend(frames[0])
+            self._ft_xs.extend(frames[1])
             self._trim_ft_history()
         return self._drain(force=False)
 
@@ -264,7 +264,8 @@ class StreamingFeatureExtractor:
         Parameters
         ----------
         ft_t : np.ndarray, shape (m,)
-            Time of each F/T feature frame's last sample, seconds.
+            Time of each F/T feature frame, seconds: the stamp of the wrench sample that
+            completed it (:class:`ForceTorqueStream` with an F/T-only configuration).
         ft_x : np.ndarray, shape (m, len(self.ft.columns))
             Their features (:class:`ForceTorqueStream` columns).
 

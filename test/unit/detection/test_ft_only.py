@@ -60,11 +60,11 @@ def bundle() -> ModelBundle:
 
 
 def _wrench(*, duration_s: float = 6.0, step_s: float = STEP_S, knock_s: Optional[float] = None,
-            seed: int = 1) -> tuple:
+            seed: int = 1, rate: float = RATE) -> tuple:
     """Stamps, force, torque: a held object (5 N), the table taking 3 N of it at ``step_s``."""
     rng = np.random.default_rng(seed)
-    n = int(duration_s * RATE)
-    t = T0 + np.arange(n) / RATE
+    n = int(duration_s * rate)
+    t = T0 + np.arange(n) / rate
     force = np.zeros((n, 3)) + rng.normal(scale=0.02, size=(n, 3))
     torque = np.zeros((n, 3)) + rng.normal(scale=0.002, size=(n, 3))
     force[:, 2] -= 5.0
@@ -181,6 +181,29 @@ def test_blocks_give_the_per_message_decisions(bundle):
     features = run_features(events, extractor=StreamingFeatureExtractor(
         config=CONFIG, audio_rate=16000.0))
     assert np.array_equal(features.t, single.t)         # train sees the frames detect decides
+
+
+@pytest.mark.parametrize('rate', [51.0, 125.0])
+def test_off_the_grid_rates_release_at_the_sample_that_decided(bundle, rate):
+    # 51 and 125 Hz are resampled onto the 100 Hz grid: a frame is timed at the stamp of the
+    # sample that completed it, in blocks and per message, and so is the release.
+    t, force, torque = _wrench(knock_s=2.5, rate=rate)
+    events = _events(t, force, torque)
+    settings = {'wrench_rate': rate}
+    blocks = run_detector(events, detector=_detector(bundle, **settings))
+    single = run_detector(events, detector=_detector(bundle, **settings), in_blocks=False)
+    for key in ('t', 'p', 'contact', 'valid'):
+        assert np.array_equal(getattr(blocks, key), getattr(single, key)), key
+    assert blocks.releases == single.releases and len(blocks.releases) == 1
+    assert np.all(np.isin(single.t, t)) and single.releases[0] in t
+    assert T0 + STEP_S <= single.releases[0] <= T0 + STEP_S + 0.3
+    # the node's calls: one sample per on_wrench_one; its release log and age use these times
+    node = _detector(bundle, **settings)
+    decided = [node.on_wrench_one(t=float(e.t[0]), values=[*e.force[0], *e.torque[0]],
+                                  now=e.now) if isinstance(e, WrenchEvent)
+               else node.on_audio(e.samples, stamp=e.stamp, now=e.now) for e in events]
+    assert np.array_equal(np.concatenate([d.t for d in decided]), single.t)
+    assert [r for d in decided for r in d.releases] == single.releases
 
 
 def test_warmup_applies_from_the_first_ft_frame(bundle):

@@ -20,7 +20,9 @@ from contact_detector.detection import factory
 from contact_detector.errors import ConfigError
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.force_torque import ForceTorqueStream
+from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
+from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.discovery import discover_streams
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
@@ -129,6 +131,115 @@ def test_feature_frames_of_a_step_come_at_the_right_time(rate):
         col = stream.columns.index('force_change')
         return ft_t[np.argmax(x[:, col] >= 5.0)]
     assert abs(rise(rate) - rise(100.0)) <= 0.01 + 1.0 / rate
+
+
+#: An F/T-only configuration (frames clocked by the F/T stream) with a feature over samples.
+FT_ONLY = FeatureConfig(audio=False, ft_window=16, extra_features=('force_change',))
+OFF_GRID, ON_GRID = [51.0, 125.0, 333.0], [100.0, 200.0, 1000.0]
+
+
+def _noisy(rate: float, *, jitter: float, seconds: float = 1.0, seed: int = 0):
+    """Return stamps and a held load with noise on every axis at ``rate`` (jitter in steps)."""
+    rng = np.random.default_rng(seed)
+    n = int(seconds * rate)
+    t = T0 + np.arange(n) / rate
+    if jitter:
+        t = t + rng.uniform(-jitter / 2, jitter / 2, n) / rate
+    return t, np.array([0.5, 0.2, -5.0, 0.01, 0.02, 0.0]) + rng.normal(0, 0.3, (n, 6))
+
+
+def _ft_only_rows(t, values, rate):
+    frames = StreamingFeatureExtractor(config=FT_ONLY, audio_rate=16000.0,
+                                       ft_input_rate=rate).push_wrench(
+        t=t, force=values[:, :3], torque=values[:, 3:])
+    return frames.t, frames.x
+
+
+@pytest.mark.parametrize('jitter', [0.0, 0.1])
+@pytest.mark.parametrize('rate', OFF_GRID + ON_GRID)
+def test_an_ft_only_row_is_timed_at_the_newest_sample_it_depends_on(rate, jitter):
+    """
+    A row's time is the stamp of the newest wrench sample its values depend on.
+
+    Changing the samples from ``k`` on leaves every row timed before ``t_k`` as it was, bit for
+    bit (no row depends on a sample after its time), and every row time is a stamp (so before
+    the next sample's). Where the wrench is resampled (51, 125, 333 Hz) a row's grid point lies
+    before that stamp; the detector must not count latency from there. The rows timed at
+    ``t_k`` change too (the time is not later than needed), but for stamps exactly on the
+    125 Hz lattice: every 4th falls on a grid point, and the resampler's "at or after
+    ``g_j``" (``floor((t - g_0) f_out + 1e-9)`` on stamps of 1.7e9 s) counts about half of
+    those as before it, so the next sample completes that grid point and times its row.
+    """
+    first = ForceTorqueStream(config=FT_ONLY, input_rate=100.0).first_end / 100.0
+    t, values = _noisy(rate, jitter=jitter, seconds=first + 70 / rate + 0.1)
+    times, x = _ft_only_rows(t, values, rate)
+    at = np.searchsorted(t, times)
+    assert np.array_equal(t[at], times)                    # a stamp, so < the next one
+    # sample by sample (a live node) gives the same times and values
+    live = StreamingFeatureExtractor(config=FT_ONLY, audio_rate=16000.0, ft_input_rate=rate)
+    rows = [live.push_wrench_one(t=t[i], values=values[i]) for i in range(t.size)]
+    assert np.array_equal(np.concatenate([r.t for r in rows]), times)
+    np.testing.assert_allclose(np.concatenate([r.x for r in rows]), x, rtol=0, atol=1e-9)
+    rng = np.random.default_rng(1)
+    checked = 0
+    for k in range(at[0], min(at[0] + 60, t.size)):
+        changed = values.copy()
+        changed[k:] += rng.normal(0, 3.0, (t.size - k, 6))
+        times_k, x_k = _ft_only_rows(t, changed, rate)
+        assert np.array_equal(times_k, times)
+        before = times < t[k]
+        assert np.array_equal(x_k[before], x[before]), k
+        on = times == t[k]
+        if jitter or rate in ON_GRID:
+            assert np.all(np.any(x_k[on] != x[on], axis=1)), k
+        checked += int(np.any(x_k[on] != x[on], axis=1).sum())
+    assert checked >= 5
+
+
+@pytest.mark.parametrize('rate', OFF_GRID + ON_GRID)
+def test_ft_only_frames_move_only_their_time_and_only_off_the_grid(rate):
+    """The features of an F/T-only frame are the grid's; its time moves by < 1 input step."""
+    t, values = _noisy(rate, jitter=0.1, seconds=2.0)
+    kw = {'t': t, 'force': values[:, :3], 'torque': values[:, 3:]}
+    own_t, own_x = ForceTorqueStream(config=FT_ONLY, input_rate=rate).push(**kw)
+    grid_t, grid_x = ForceTorqueStream(config=dataclasses.replace(FT_ONLY, audio=True),
+                                       input_rate=rate).push(**kw)
+    assert own_t.size == grid_t.size > 50
+    assert np.array_equal(own_x, grid_x)
+    if rate in ON_GRID:
+        assert np.array_equal(own_t, grid_t)            # block means: the block's last stamp
+        return
+    late = own_t - grid_t
+    assert np.all(late >= 0) and late.max() > 0.2 / rate
+    assert np.all(late < np.diff(t).max())
+
+
+@pytest.mark.parametrize('rate', [51.0, 125.0])
+def test_the_live_path_keeps_every_ft_frame_a_sample_completes(rate):
+    """
+    One wrench message per sample (the node): the rows of ``push_wrench``, bit for bit.
+
+    At 51 Hz one sample completes two grid points (two F/T frames) now and then; an audio
+    frame takes the newest, so losing one makes it use F/T 10 ms older than offline.
+    """
+    config = FeatureConfig(ft_window=16, extra_features=('force_change',))
+    t, values = _noisy(rate, jitter=0.1, seconds=1.5)
+    audio = np.random.default_rng(2).normal(0, 0.05, int(1.5 * 16000) + 160)
+    out = {}
+    for one in (False, True):
+        ex = StreamingFeatureExtractor(config=config, audio_rate=16000.0, ft_input_rate=rate)
+        rows = []
+        for k in range(150):
+            stamp = T0 + (160 * (k + 1) - 1) / 16000.0
+            rows.append(ex.push_audio(audio[160 * k:160 * (k + 1)], stamp=stamp))
+            for i in np.flatnonzero((t > stamp - 0.01) & (t <= stamp)):
+                rows.append(ex.push_wrench_one(t=t[i], values=values[i]) if one else
+                            ex.push_wrench(t=t[i:i + 1], force=values[i:i + 1, :3],
+                                           torque=values[i:i + 1, 3:]))
+        out[one] = FeatureFrames.concat(rows, ex.names)
+    assert len(out[True]) > 100 and out[True].valid.sum() > 50
+    for field in ('t', 'x', 'valid'):
+        assert np.array_equal(getattr(out[True], field), getattr(out[False], field)), field
 
 
 def _upsampled(trial, rate):
