@@ -31,8 +31,8 @@ onset (an early release):
   learnt a table looks like) and among those labelled *no contact*.
 
 Then the same feature values for the caught trials at their release frame, as a reference.
-``--cache`` keeps the computed frames (a pickle, with their column names: a cache written with
-other columns is recomputed) for the next run on the same folders.
+``--cache`` keeps the computed frames (a pickle, with their feature configuration: a cache
+written with another one is recomputed) for the next run on the same folders.
 """
 
 import argparse
@@ -57,7 +57,7 @@ WARMUP_S = 0.5
 SHOWN = ('force_shift', 'force_shift_rel', 'force_carried_cos', 'torque_carried_cos',
          'force_change', 'force_change_max', 'force_shift_min', 'force_shift_max',
          'force_flux', 'torque_flux', 'audio_power_rel_db', 'audio_peak_rel_db',
-         'audio_rise_db', 'ft_carried_lever')
+         'audio_rise_db', 'audio_hold_db', 'ft_carried_lever')
 
 
 def percentile(values: np.ndarray, x: float) -> float:
@@ -80,8 +80,8 @@ def main(argv=None) -> int:
                      **LOFO_CONFIG_CHANGES.get(args.setting, {}))
     frames = None
     if args.cache is not None and args.cache.exists():
-        names, frames = pickle.loads(args.cache.read_bytes())
-        if names != config.feature_names:       # written with other feature columns
+        written, frames = pickle.loads(args.cache.read_bytes())
+        if written != config.to_dict():         # written with another feature configuration
             frames = None
     if frames is None:
         trials = {}
@@ -90,7 +90,7 @@ def main(argv=None) -> int:
         frames = list(compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
                                      wrench_rate=100.0, jobs=args.jobs).values())
         if args.cache is not None:
-            args.cache.write_bytes(pickle.dumps((config.feature_names, frames)))
+            args.cache.write_bytes(pickle.dumps((config.to_dict(), frames)))
     columns = LOFO_SETTINGS[args.setting] or DEFAULT_FEATURES.feature_names
     setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
                              columns=tuple(columns))

@@ -55,7 +55,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                                         'see whether a change held'),
                         ('carried_window', 'F/T samples after a start or an arming whose '
                                            'median is the carried load of *_shift_rel and '
-                                           '*_carried_cos')):
+                                           '*_carried_cos'),
+                        ('audio_hold_frames', 'audio frames over which audio_hold_db takes '
+                                              'the minimum')):
         default = getattr(d, field)
         parser.add_argument('--' + field.replace('_', '-'), type=int, default=default,
                             help=f'{text} (default {default})')
@@ -136,6 +138,7 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          shift_min_frames=args.shift_min_frames, shift_lag=args.shift_lag,
                          shift_window=args.shift_window, hold_frames=args.hold_frames,
                          carried_window=args.carried_window,
+                         audio_hold_frames=args.audio_hold_frames,
                          carried_floor_force=args.carried_floor_force,
                          carried_floor_torque=args.carried_floor_torque,
                          extra_features=extra)

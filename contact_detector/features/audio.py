@@ -21,7 +21,7 @@ The audio path of the streaming feature core: samples to timed power frames and 
 * :class:`NoiseFloor` tracks the quietest recent power;
 * :class:`AudioLevels` turns frame powers into the audio features of
   :data:`~contact_detector.features.config.AUDIO_FEATURES` (power, dB above the floor, recent
-  peak, rise, drop from the peak).
+  peak, rise, drop from the peak, recent minimum).
 
 Time is passed in (chunk stamps); nothing here reads a clock.
 """
@@ -283,13 +283,16 @@ class AudioLevels:
     Per frame, in :data:`~contact_detector.features.config.AUDIO_FEATURES`' order: the power
     (eq. 1), ``audio_power_rel_db`` (dB above the :class:`NoiseFloor`), ``audio_peak_rel_db``
     (its maximum over the newest ``peak_frames`` frames), ``audio_rise_db`` (its change over
-    ``rise_frames`` frames) and ``audio_peak_gap_db`` (the drop from that peak). Histories
-    carry across calls, so the values do not depend on how the frames were grouped into calls.
+    ``rise_frames`` frames), ``audio_peak_gap_db`` (the drop from that peak) and
+    ``audio_hold_db`` (its minimum over the newest ``audio_hold_frames`` frames; fewer right
+    after a start). Histories carry across calls, so the values do not depend on how the frames
+    were grouped into calls.
 
     Parameters
     ----------
     config : FeatureConfig
-        Hop, noise floor time constant, ``peak_frames``, ``rise_frames`` and the features used.
+        Hop, noise floor time constant, ``peak_frames``, ``rise_frames``,
+        ``audio_hold_frames`` and the features used.
 
     """
 
@@ -303,6 +306,7 @@ class AudioLevels:
         """Forget the floor and the histories."""
         self.floor.reset()
         self._rel_hist = [-math.inf] * (self.config.peak_frames - 1)
+        self._hold_hist: list = []          # the newest audio_hold_frames - 1 dB values
         self._rise_hist: list = []          # the newest rise_frames dB values, oldest first
 
     def rows(self, power: np.ndarray) -> list:
@@ -317,7 +321,7 @@ class AudioLevels:
         Returns
         -------
         list of tuple
-            Per frame, the values of :data:`AUDIO_FEATURES` in that order: all five when any
+            Per frame, the values of :data:`AUDIO_FEATURES` in that order: all six when any
             extra audio feature is configured, else ``(power,)``.
 
         """
@@ -327,7 +331,8 @@ class AudioLevels:
         rel_values = rel.tolist()
         peak = self._recent_peak(rel).tolist()
         return list(zip(power.tolist(), rel_values, peak, self._rise(rel_values),
-                        [pk - r for pk, r in zip(peak, rel_values)]))
+                        [pk - r for pk, r in zip(peak, rel_values)],
+                        self._held(rel).tolist()))
 
     def _rise(self, rel_values: list) -> list:
         # audio_rise_db: each value minus the one rise_frames frames earlier (the oldest one
@@ -349,3 +354,12 @@ class AudioLevels:
         history = np.concatenate([self._rel_hist, rel])
         self._rel_hist = history[history.size - (k - 1):].tolist() if k > 1 else []
         return running_max(values=rel[:, None], before=before, window=k)[:, 0]
+
+    def _held(self, rel: np.ndarray) -> np.ndarray:
+        # audio_hold_db: running minimum over the newest audio_hold_frames values (over those
+        # seen while fewer), across chunk boundaries; -max(-x) is exactly min(x).
+        k = self.config.audio_hold_frames
+        before = -np.array(self._hold_hist).reshape(-1, 1)
+        history = self._hold_hist + rel.tolist()
+        self._hold_hist = history[max(0, len(history) - (k - 1)):] if k > 1 else []
+        return -running_max(values=-rel[:, None], before=before, window=k)[:, 0]

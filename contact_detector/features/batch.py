@@ -282,7 +282,8 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
             peak = rel[max(0, i - config.peak_frames + 1):i + 1].max()
             audio = {'audio_power_rel_db': rel[i], 'audio_peak_rel_db': peak,
                      'audio_rise_db': rel[i] - rel[max(0, i - config.rise_frames)],
-                     'audio_peak_gap_db': peak - rel[i]}
+                     'audio_peak_gap_db': peak - rel[i],
+                     'audio_hold_db': rel[max(0, i - config.audio_hold_frames + 1):i + 1].min()}
             for name, value in audio.items():
                 if name in names:
                     x[i, names.index(name)] = value

@@ -580,6 +580,7 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
                            '--delta-window', '2', '--delta-lag', '4', '--baseline-window', '9',
                            '--rise-frames', '3', '--change-max-frames', '7',
                            '--hold-frames', '6', '--carried-window', '30',
+                           '--audio-hold-frames', '7',
                            '--carried-floor-force', '0.8', '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     # Without options, train uses the shipped features; the F/T change windows are options.
@@ -587,7 +588,7 @@ def test_train_tree_counts_and_release_rule_options(data, tmp_path, capsys):
     config = bundle.feature_config
     assert (config.delta_window, config.delta_lag, config.baseline_window,
             config.rise_frames, config.change_max_frames) == (2, 4, 9, 3, 7)
-    assert config.hold_frames == 6
+    assert config.hold_frames == 6 and config.audio_hold_frames == 7
     assert (config.carried_window, config.carried_floor_force) == (30, 0.8)
     table = bundle.metrics['trial']['validation']
     assert [row['n_estimators'] for row in table] == [2, 4, 5]

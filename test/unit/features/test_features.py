@@ -523,6 +523,7 @@ configs = st.builds(
         ('force_shift', 'torque_shift_min'), ('torque_shift', 'force_shift_max', 'force_delta'),
         ('force_carried_cos', 'torque_shift_rel'), ('force_shift_rel', 'torque_carried_cos'),
         ('ft_carried_lever',), ('force_shift', 'ft_carried_lever', 'torque_carried_cos'),
+        ('audio_hold_db',), ('audio_peak_rel_db', 'audio_hold_db', 'force_shift'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
@@ -532,6 +533,7 @@ configs = st.builds(
     shift_window=st.sampled_from([1, 4, 40]),
     hold_frames=st.sampled_from([1, 2, 4, 7]),
     carried_window=st.sampled_from([1, 7, 50]),
+    audio_hold_frames=st.sampled_from([1, 2, 4, 8, 13]),
 )
 
 
@@ -667,6 +669,47 @@ def test_audio_rise_and_peak_gap_tell_a_sound_starting_from_one_decaying():
     assert np.all(rise[decaying] < -1) and np.all(gap[decaying] > 1)
 
 
+def test_audio_hold_tells_a_lasting_scrape_from_a_click():
+    # silence, a click at 0.3 s that decays within ~20 ms, then a scrape (noise) 0.6-0.9 s
+    rate = 16000
+    n = np.arange(rate)
+    rng = np.random.default_rng(5)
+    click = np.where(n >= 0.3 * rate, 0.5 * np.exp(-(n - 0.3 * rate) / (0.004 * rate)), 0.0)
+    click = click * np.sin(2 * np.pi * 3000 * n / rate)
+    scrape = np.where((n >= 0.6 * rate) & (n < 0.9 * rate), rng.normal(0, 0.05, rate), 0.0)
+    audio = click + scrape + rng.normal(0, 1e-4, rate)
+    held = {}
+    for hold in (4, 8):
+        config = FeatureConfig(extra_features=('audio_power_rel_db', 'audio_peak_rel_db',
+                                               'audio_hold_db'), audio_hold_frames=hold)
+        extractor = StreamingFeatureExtractor(config=config, audio_rate=rate)
+        frames = stream(extractor=extractor, audio=audio, audio_rate=rate,
+                        ft_t=T0 + np.arange(101) / 100, force=np.zeros((101, 3)),
+                        torque=np.zeros((101, 3)), audio_chunks=[333] * 60,
+                        ft_chunks=[1] * 101)
+        t = frames.t - T0
+        peak = frames.x[:, config.feature_names.index('audio_peak_rel_db')]
+        held[hold] = frames.x[:, config.feature_names.index('audio_hold_db')]
+        # the click is loud (its peak far above the floor) but does not hold: a 32 ms frame
+        # holds it for up to 4 hops, so 4 frames can all hold it for a few frames, 8 cannot
+        clicking = (t > 0.3) & (t < 0.4)
+        assert peak[clicking].max() > 40
+        assert (held[hold][clicking] > 10).sum() <= (3 if hold == 4 else 0)
+        # the scrape holds: once it has lasted hold frames (+ the frame length) it stays high
+        scraping = (t > 0.6 + 0.032 + 0.01 * hold) & (t < 0.9)
+        assert scraping.sum() > 15 and held[hold][scraping].min() > 30
+        # and it is the minimum of the power above the floor over the newest hold frames
+        rel = frames.x[:, config.feature_names.index('audio_power_rel_db')]
+        assert held[hold].tolist() == [rel[max(0, i - hold + 1):i + 1].min()
+                                       for i in range(rel.size)]
+    # a longer hold is never higher: its minimum is over more frames
+    assert np.all(held[8] <= held[4])
+    # the scrape has held 4 frames 40 ms before it has held 8
+    t4 = t[np.argmax((held[4] > 30) & (t > 0.5))]
+    t8 = t[np.argmax((held[8] > 30) & (t > 0.5))]
+    assert t8 - t4 == pytest.approx(0.04, abs=0.0015)
+
+
 def test_silence_streams_finite_features():
     extractor = StreamingFeatureExtractor(config=FeatureConfig(
         extra_features=('audio_power_rel_db', 'force_delta', 'torque_delta')), audio_rate=16000)
@@ -782,6 +825,16 @@ def test_config_validation_names_the_field():
     assert FeatureConfig.from_dict(held.to_dict()) == held
     with pytest.raises(ConfigError, match='hold_frames'):
         FeatureConfig(hold_frames=0)
+    # so is audio_hold_frames (the shipped models' configuration hashes stay the same)
+    assert 'audio_hold_frames' not in FeatureConfig.shipped().to_dict()
+    audio_held = FeatureConfig(audio_hold_frames=5, extra_features=('audio_hold_db',))
+    assert audio_held.to_dict()['audio_hold_frames'] == 5
+    assert FeatureConfig.from_dict(audio_held.to_dict()) == audio_held
+    for bad in (0, 2.0, True):
+        with pytest.raises(ConfigError, match='audio_hold_frames'):
+            FeatureConfig(audio_hold_frames=bad)
+    with pytest.raises(ConfigError, match='audio_hold_db'):
+        FeatureConfig(audio=False, extra_features=('audio_hold_db',))
     with pytest.raises(ConfigError, match='unknown'):
         FeatureConfig.from_dict({'bogus': 1})
 
