@@ -85,10 +85,9 @@ class LabelWindow:
             False for frames ending in ``[onset + end_s, onset + end_s + ignore_s)``.
 
         """
-        keep = np.ones(t.shape[0], dtype=bool)
-        for onset in onsets:
-            keep &= ~((t >= onset + self.end_s) & (t < onset + self.end_s + self.ignore_s))
-        return keep
+        # the frames left out are a label window of their own, right after this one
+        return frame_labels(t=t, onsets=onsets, start_s=self.end_s,
+                            end_s=self.end_s + self.ignore_s) == 0
 
 
 @dataclass
