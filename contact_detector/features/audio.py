@@ -300,6 +300,8 @@ class AudioLevels:
         self.config = config
         self.floor = NoiseFloor(config=config)
         self.needs_rel = any(name in config.feature_names for name in AUDIO_FEATURES[1:])
+        # audio_hold_db is no column of the shipped models: skip its running minimum there
+        self.needs_hold = 'audio_hold_db' in config.feature_names
         self.reset()
 
     def reset(self) -> None:
@@ -322,7 +324,8 @@ class AudioLevels:
         -------
         list of tuple
             Per frame, the values of :data:`AUDIO_FEATURES` in that order: all six when any
-            extra audio feature is configured, else ``(power,)``.
+            extra audio feature is configured (``audio_hold_db`` 0 unless it is), else
+            ``(power,)``.
 
         """
         if not self.needs_rel:
@@ -332,7 +335,7 @@ class AudioLevels:
         peak = self._recent_peak(rel).tolist()
         return list(zip(power.tolist(), rel_values, peak, self._rise(rel_values),
                         [pk - r for pk, r in zip(peak, rel_values)],
-                        self._held(rel).tolist()))
+                        self._held(rel).tolist() if self.needs_hold else [0.0] * len(peak)))
 
     def _rise(self, rel_values: list) -> list:
         # audio_rise_db: each value minus the one rise_frames frames earlier (the oldest one
