@@ -1,0 +1,149 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Which trials a left-out family loses, by one of the simulator's parameters.
+
+    .venv/bin/python benchmarks/lofo_by_param.py DIR... --family geometry --param tared
+        [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1] [--trials]
+
+Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
+0-0.3 s, the setting's columns of the full feature configuration) on every family but
+``--family``, scores the shipped rule on that family and counts, per value of ``--param``
+(a family parameter in the manifests' ``params.family``, else a trial parameter in
+``params``; numbers are cut at their quartiles), the left-out trials caught within 500 ms,
+early and not caught, over the forests of ``--seeds``. ``--trials`` also prints every trial.
+``--cache`` keeps the computed frames for the next run on the same folders.
+"""
+
+import argparse
+from dataclasses import replace
+import json
+from pathlib import Path
+import pickle
+import sys
+
+from contact_detector.detection.release import ReleaseLogic
+from contact_detector.features.config import EXTRA_FEATURES
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
+from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
+from contact_detector.training.sweep import (compute_frames, decode_bags, FeatureSetting,
+                                             fit_forest)
+import numpy as np
+
+WARMUP_S = 0.5
+CAUGHT_S = 0.5
+
+
+def verdict(*, release_t: float | None, onset_t: float) -> str:
+    """Return 'caught', 'early' or 'missed' (no release within 500 ms after the onset)."""
+    if release_t is None or release_t - onset_t > CAUGHT_S:
+        return 'missed'
+    return 'early' if release_t < onset_t else 'caught'
+
+
+def param_of(trial: dict, name: str) -> object:
+    """Return a trial's family parameter ``name``, else its trial parameter, else None."""
+    params = trial.get('params', {})
+    family = params.get('family', {})
+    return family[name] if name in family else params.get(name)
+
+
+def groups(values: list) -> list:
+    """Return one label per value: the value itself, or its quartile range for numbers."""
+    numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if len(numbers) != len(values) or len(set(numbers)) <= 4:
+        return [str(v) for v in values]
+    edges = np.quantile(numbers, [0.25, 0.5, 0.75])
+    bins = np.searchsorted(edges, numbers, side='right')
+    bounds = [min(numbers), *edges, max(numbers)]
+    return [f'{bounds[b]:.3g}-{bounds[b + 1]:.3g}' for b in bins]
+
+
+def main(argv=None) -> int:
+    """Run the breakdown; return the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('folders', nargs='+', type=Path)
+    parser.add_argument('--family', default='geometry')
+    parser.add_argument('--param', default='tared')
+    parser.add_argument('--setting', default='shipped', choices=sorted(LOFO_SETTINGS))
+    parser.add_argument('--seeds', default='0,1,2')
+    parser.add_argument('--cache', type=Path, default=None)
+    parser.add_argument('--jobs', type=int, default=1)
+    parser.add_argument('--trials', action='store_true')
+    args = parser.parse_args(argv)
+    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
+                     **LOFO_CONFIG_CHANGES.get(args.setting, {}))
+    frames = None
+    if args.cache is not None and args.cache.exists():
+        written, frames = pickle.loads(args.cache.read_bytes())
+        if written != config.to_dict():         # written with another feature configuration
+            frames = None
+    if frames is None:
+        trials = {}
+        for i, folder in enumerate(args.folders):
+            trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
+        frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
+                                wrench_rate=100.0, jobs=args.jobs)
+        if args.cache is not None:
+            args.cache.write_bytes(pickle.dumps((config.to_dict(), frames)))
+    manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
+                 for f in args.folders]
+    columns = LOFO_SETTINGS[args.setting] or DEFAULT_FEATURES.feature_names
+    setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
+                             columns=tuple(columns))
+    cols = [config.feature_names.index(c) for c in columns]
+    fit = [f for f in frames.values() if f.truth.condition != args.family]
+    test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
+    results = {k: [] for k in test}
+    for seed in (int(s) for s in args.seeds.split(',')):
+        forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=seed,
+                            jobs=args.jobs)
+        for key, f in test.items():
+            p = forest.predict_proba(f.x[:, cols])[:, 1]
+            logic = ReleaseLogic(rule=DEFAULT_RULE, armed=True)
+            _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
+                                     blocked=f.t < f.t0 + WARMUP_S)
+            first = (float(np.atleast_1d(releases)[0])
+                     if releases is not None and np.size(releases) else None)
+            results[key].append(verdict(release_t=first, onset_t=f.truth.onset_t))
+    keys = sorted(test)
+    values = []
+    for key in keys:
+        tag, name = key.split('/', 1)
+        values.append(param_of(manifests[int(tag)].get(name, {}), args.param))
+    labels = groups(values)
+    print(f'{len(fit)} training trials, {len(test)} left out ({args.family}), setting '
+          f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
+    print(f'| {args.param} | trials | caught | early | not caught |')
+    print('|---|---|---|---|---|')
+    for label in sorted(set(labels)):
+        got = [v for key, lab in zip(keys, labels) if lab == label for v in results[key]]
+        print(f'| {label} | {sum(lab == label for lab in labels)} | '
+              f'{got.count("caught")}/{len(got)} | {got.count("early")} | '
+              f'{got.count("missed")} |')
+    if args.trials:
+        print()
+        for key, value in zip(keys, values):
+            print(f'{args.folders[int(key.split("/")[0])]}/{key.split("/", 1)[1]}: '
+                  f'{args.param}={value}: {" ".join(results[key])}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
