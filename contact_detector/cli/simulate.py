@@ -29,7 +29,7 @@ from typing import Sequence
 from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
 from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, EVENT_MODES,
-                                             resolve_conditions)
+                                             resolve_conditions, TARED_MODES)
 from contact_detector.sim.trial import HIT_KINDS, simulate_trial, simulate_trials
 from tqdm import tqdm
 
@@ -76,6 +76,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--events', choices=EVENT_MODES, default='family',
                         help='family (default): touches, brushes and set-downs only in the '
                              'exogenous set; everywhere: in every set')
+    parser.add_argument('--tared', choices=TARED_MODES, default='family',
+                        help='F/T sensors tared (zeroed at rest before the lift, so they read '
+                             'the change of the load since then): family (default): only the '
+                             'geometry set draws it (tared or not, equal odds); everywhere: '
+                             'every set draws it; all: every sensor is tared')
     parser.add_argument('--hits', choices=HIT_KINDS, default=None,
                         help='give every trial this kind of exogenous event instead of the '
                              "set's cycle (mixed: any of hand, table, touch, brush, setdown "
@@ -116,7 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         simulate_trial(seed=args.seed, index=args.start_index, condition=conditions[0],
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                        chunk_size=args.chunk_size, label_window_s=args.label_window,
-                       events=args.events, hits=args.hits)
+                       events=args.events, tared=args.tared, hits=args.hits)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -125,12 +130,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window, events=args.events,
-                                 hits=args.hits)
+                                 tared=args.tared, hits=args.hits)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
                     'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
-                    'events': args.events, 'hits': args.hits}
+                    'events': args.events, 'tared': args.tared, 'hits': args.hits}
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -364,6 +364,13 @@ EVERYWHERE_HIT_CYCLE = DEFAULT_HIT_CYCLE + ('mixed',)
 EVENT_RANGES: dict[str, Spec] = {
     name: spec for name, spec in _F_EXOGENOUS.items() if name.split('_')[0] in
     ('touch', 'brush', 'setdown')}
+#: Which trials' F/T sensors are tared (zeroed at rest before the lift): ``'family'``, only
+#: where the family draws it ('geometry': tared or not, equal odds); ``'everywhere'``, every set
+#: whose family does not draw it draws it from :data:`TARED_RANGE`; ``'all'``, every sensor.
+TARED_MODES = ('family', 'everywhere', 'all')
+#: The ``tared`` draw of a set whose family does not draw it, with ``tared='everywhere'`` (the
+#: 'geometry' range; its own random stream, so the trial is otherwise unchanged).
+TARED_RANGE: Spec = _F_GEOMETRY['tared']
 
 
 @dataclass(frozen=True)

@@ -46,9 +46,10 @@ Randomness
 streams ``[seed, index, k]`` draw the hit plan (k=1), the F/T sensor noise (k=2), the audio
 (k=3), the chunking (k=4), the geometry (k=5) and, for the families only, the family
 parameters and hit kind (k=6); the 'real_sounds' family draws its audio (which recordings,
-where they start, the microphone's AGC phase) from k=7 instead of k=3. The hit plan therefore
-never changes the other parameters: ``simulate_trial(..., hits='none')`` is the same trial
-without its exogenous impacts.
+where they start, the microphone's AGC phase) from k=7 instead of k=3. ``events='everywhere'``
+draws the missing event parameters from k=8 and ``tared='everywhere'`` the missing ``tared``
+from k=9. The hit plan therefore never changes the other parameters:
+``simulate_trial(..., hits='none')`` is the same trial without its exogenous impacts.
 """
 
 from dataclasses import dataclass, field, replace
@@ -58,7 +59,8 @@ from typing import Iterator, Sequence
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
 from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
-                                             get_condition, resolve_conditions)
+                                             get_condition, resolve_conditions, TARED_MODES,
+                                             TARED_RANGE)
 from contact_detector.sim.geometry import draw_geometry
 from contact_detector.sim.hits import Hit, plan_hits
 from contact_detector.sim.loads import (contact_law, draw_sensor_errors, first_crossing, G,
@@ -179,7 +181,7 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
 
 
 def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
-                events) -> None:
+                events, tared) -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
@@ -198,12 +200,14 @@ def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s,
         raise ConfigError(f'hits must be None or one of {HIT_KINDS}, got {hits!r}')
     if events not in EVENT_MODES:
         raise ConfigError(f'events must be one of {EVENT_MODES}, got {events!r}')
+    if tared not in TARED_MODES:
+        raise ConfigError(f'tared must be one of {TARED_MODES}, got {tared!r}')
 
 
 def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rate: int = 16000,
                    ft_rate: float = 100.0, chunk_size: int | None = None,
                    label_window_s: float = 0.1, hits: str | None = None,
-                   events: str = 'family') -> Trial:
+                   events: str = 'family', tared: str = 'family') -> Trial:
     """
     Synthesise one trial.
 
@@ -234,6 +238,14 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         parameters draws them from the 'exogenous' ranges, in a stream of their own
         (``default_rng([seed, index, 8])``), and ``hits=None`` draws from the set's
         ``ConditionSet.cycle``. The rest of the trial is the one ``events='family'`` gives.
+    tared : str
+        'family' (default), 'everywhere' or 'all' (``TARED_MODES`` of :mod:`.conditions`):
+        whether the F/T sensor is tared (zeroed at rest before the lift, so it reads the load's
+        change since then). 'family': only 'geometry' draws it; 'everywhere': a set whose
+        family does not draw it draws it (untared or tared, equal odds) in a stream of its own
+        (``default_rng([seed, index, 9])``); 'all': every sensor is tared. An untared trial's
+        wrench and audio are the ones ``tared='family'`` gives. With 'everywhere' and 'all'
+        every trial's ``params['family']`` is recorded, its ``tared`` the draw.
 
     Returns
     -------
@@ -247,7 +259,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     """
     _check_args(seed=seed, index=index, audio_rate=audio_rate, ft_rate=ft_rate,
                 chunk_size=chunk_size, label_window_s=label_window_s, hits=hits,
-                events=events)
+                events=events, tared=tared)
     cond = get_condition(condition)
     seed, index, audio_rate, ft_rate = int(seed), int(index), int(audio_rate), float(ft_rate)
     rng = np.random.default_rng([seed, index])
@@ -264,6 +276,11 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         q = replace(q, **{name: EVENT_RANGES[name].sample(ev_rng) for name in missing})
         cycle = cond.cycle(events=events)
         drawn_kind = cycle[int(ev_rng.integers(0, len(cycle)))] if hits is None else drawn_kind
+    if tared == 'all':
+        q = replace(q, tared=True)
+    elif tared == 'everywhere' and 'tared' not in cond.family:
+        # a stream of its own, so every other parameter stays what 'family' draws
+        q = replace(q, tared=bool(TARED_RANGE.sample(np.random.default_rng([seed, index, 9]))))
     hit_kind = hits if hits is not None else drawn_kind
     # the 'real_sounds' family: recordings from the fetched bank (ConfigError if missing)
     bank = sound_bank.load_bank() if q.sound_source == 'real' else None
@@ -363,7 +380,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         derived.update(_family_facts(setup, force=force, torque=torque, start=start,
                                      thr_scale=thr_scale))
     params = p.as_dict()
-    if family:
+    if family or tared != 'family':
         params['family'] = _jsonable(q.as_dict())
     params['derived'] = _jsonable(derived)
     return Trial(name=f'trial_{index:04d}', condition=condition, seed=seed, start_time=start,
@@ -458,7 +475,7 @@ def _family_facts(setup: Setup, *, force: np.ndarray, torque: np.ndarray, start:
 
 def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',),
                     start_index: int = 0, hits: str | None = None, events: str = 'family',
-                    **kw) -> Iterator[Trial]:
+                    tared: str = 'family', **kw) -> Iterator[Trial]:
     """
     Yield ``n`` trials; trial ``i`` uses ``conditions[i % len(conditions)]``.
 
@@ -468,7 +485,7 @@ def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',)
     hits, as in the paper's 20/20/20 of 60), plus 'mixed' with ``events='everywhere'``;
     'mixed', 'touch', 'brush', 'setdown' for 'exogenous'. A ``hits`` kind is given to every
     trial. ``conditions`` may contain the aliases 'all', 'families' and 'wide'. ``hits``,
-    ``events`` and the other keywords go to :func:`simulate_trial`.
+    ``events``, ``tared`` and the other keywords go to :func:`simulate_trial`.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f'n must be an int >= 0, got {n!r}')
@@ -478,7 +495,7 @@ def simulate_trials(*, n: int, seed: int, conditions: Sequence[str] = ('paper',)
         kinds = get_condition(cond).cycle(events=events)
         kind = hits if hits is not None else kinds[(i // len(names)) % len(kinds)]
         yield simulate_trial(seed=seed, index=i, condition=cond, hits=kind, events=events,
-                             **kw)
+                             tared=tared, **kw)
 
 
 def _jsonable(value):

@@ -114,7 +114,7 @@ def sim_parts(*, n: int, seed: int, ft_rate: float, audio_rate: int) -> Dict[str
     mixed = (n + 2) // 5
     common = {'conditions': list(resolve_conditions(SIM_CONDITIONS)), 'storage': 'sqlite3',
               'audio_rate': audio_rate, 'ft_rate': ft_rate, 'chunk_size': None,
-              'label_window_s': 0.1}
+              'label_window_s': 0.1, 'tared': 'family'}
     parts = {'family': {'seed': seed, 'trials': n - mixed, 'start_index': 0, **common,
                         'events': 'family', 'hits': None},
              'mixed': {'seed': seed + 1, 'trials': mixed, 'start_index': n - mixed, **common,
@@ -173,6 +173,7 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_
         if manifest.exists():
             held[name] = json.loads(manifest.read_text())
             have = dict(held[name].get('settings', {}))
+            have.setdefault('tared', 'family')  # trials simulated before --tared existed
             same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
             if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
                 raise BagError(f'{sim_dir / name} holds other simulated trials '
@@ -188,7 +189,7 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_
                                  conditions=settings['conditions'],
                                  start_index=settings['start_index'], audio_rate=audio_rate,
                                  ft_rate=ft_rate, events=settings['events'],
-                                 hits=settings['hits'])
+                                 tared=settings['tared'], hits=settings['hits'])
         records, _ = write_trials(trials=progress(trials, settings['trials']),
                                   out_dir=part_dir, settings=settings)
         out.bags += [part_dir / r['bag'] for r in records]

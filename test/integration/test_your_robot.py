@@ -179,10 +179,12 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
             == json.loads((sim / 'mixed' / 'manifest.json').read_text()))
     capsys.readouterr()
     # The kept trials are reused; a folder holding other trials is refused.
-    # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same)
+    # (one recording fewer moves the median F/T rate, here 125.0 -> 124.6 Hz: still the same;
+    # trials simulated before --tared existed have no settings.tared: 'family')
     for part in ('family', 'mixed'):
         manifest = json.loads((sim / part / 'manifest.json').read_text())
         manifest['settings']['ft_rate'] = 124.6
+        assert manifest['settings'].pop('tared') == 'family'
         (sim / part / 'manifest.json').write_text(json.dumps(manifest))
     assert train_cli.main([*args, '--with-sim', '8', '--sim-dir', str(sim),
                            '--no-events']) == 0

@@ -28,7 +28,7 @@ from contact_detector.sim import sound_bank
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              ORIGINAL_SETS, ranges_markdown, REAL_SOUND_SETS,
-                                             resolve_conditions)
+                                             resolve_conditions, TARED_MODES)
 from contact_detector.sim.loads import G, STOP_TORQUE_NM
 from contact_detector.sim.trial import PHASES, simulate_trial, simulate_trials
 import numpy as np
@@ -431,6 +431,7 @@ def test_manifest_schema(manifest):
     json.dumps(manifest, allow_nan=False)
     assert manifest['format'] == 'contact_detector.sim.manifest'
     assert manifest['settings']['events'] == 'family'
+    assert manifest['settings']['tared'] == 'family'
 
 
 @pytest.mark.slow
@@ -659,6 +660,81 @@ def test_unknown_event_mode_is_refused(tmp_path, capsys):
         simulate_trial(seed=1, index=0, events='sometimes')
     with pytest.raises(SystemExit) as exc:
         simulate_main([str(tmp_path / 'x'), '--events', 'sometimes'])
+    assert exc.value.code == 2
+    assert 'invalid choice' in capsys.readouterr().err
+    assert not (tmp_path / 'x').exists()
+
+
+def _rest_wrench(tr):
+    """Force (N) and torque (N m) samples at rest before the lift (the tare window)."""
+    sel = (tr.wrench_t >= tr.start_time + 0.2) & (tr.wrench_t < tr.phases[1][1] - 0.2)
+    return tr.force[sel], tr.torque[sel]
+
+
+def test_tared_all_zeroes_every_sensor_at_rest_and_changes_nothing_else():
+    n = len(resolve_conditions(['wide']))
+    family = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], hits='none'))
+    tared = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], hits='none',
+                                 tared='all'))
+    assert TARED_MODES == ('family', 'everywhere', 'all')
+    for a, b in zip(family, tared):
+        assert b.params['family']['tared'] is True, b.condition
+        if a.condition == 'geometry':
+            # geometry's other family draws stay what 'family' drew
+            assert {k: v for k, v in a.params['family'].items() if k != 'tared'} == \
+                {k: v for k, v in b.params['family'].items() if k != 'tared'}
+        else:
+            assert 'family' not in a.params or a.params['family']['tared'] is False
+        (fa, _), (fb, tb) = _rest_wrench(a), _rest_wrench(b)
+        # the tared sensor reads noise around 0 at rest; the untared one the held load
+        rest_a, rest_b = np.linalg.norm(fa, axis=1).mean(), np.linalg.norm(fb, axis=1).mean()
+        assert rest_b < 0.5 and rest_b * 10 < rest_a, (a.condition, rest_a, rest_b)
+        assert np.linalg.norm(fb.mean(axis=0)) < 0.05 and np.linalg.norm(tb.mean(axis=0)) < 0.01
+        # a tare subtracts a constant: up to one quantisation step, the same wrench
+        j = int(np.searchsorted(a.wrench_t, a.onset_t))
+        q = a.params['force_quant_n']
+        assert np.ptp(b.force[:j] - a.force[:j], axis=0).max() <= q + 1e-9
+        assert a.onset_t == b.onset_t and a.phases[:5] == b.phases[:5]
+
+
+@pytest.mark.slow
+def test_tared_everywhere_draws_both_and_an_untared_draw_is_the_family_trial():
+    n = 48  # four trials of each of the twelve sets
+    family = list(simulate_trials(n=n, seed=SEED, conditions=['wide']))
+    everywhere = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], tared='everywhere'))
+    drawn = {}
+    for a, b in zip(family, everywhere):
+        assert a.condition == b.condition and a.onset_t == b.onset_t
+        is_tared = b.params['family']['tared']
+        drawn.setdefault(b.condition, set()).add(is_tared)
+        if not is_tared or b.condition == 'geometry':
+            # an untared draw (and every geometry trial) is the trial 'family' gives
+            assert a.impacts == b.impacts and a.stop_t == b.stop_t
+            for name in ('force', 'torque', 'audio', 'chunk_ends', 'wrench_log_t'):
+                assert np.array_equal(getattr(a, name), getattr(b, name)), (b.condition, name)
+            assert {k: v for k, v in a.params.items() if k != 'family'} == \
+                {k: v for k, v in b.params.items() if k != 'family'}
+        else:
+            force, _ = _rest_wrench(b)
+            assert np.linalg.norm(force.mean(axis=0)) < 0.05
+    others = {name: kinds for name, kinds in drawn.items() if name != 'geometry'}
+    assert len(others) == 11 and set().union(*others.values()) == {False, True}
+    assert sum(kinds == {False, True} for kinds in others.values()) >= 5  # not one set's quirk
+
+
+def test_cli_tared_is_in_the_manifest_and_a_bad_mode_is_refused(tmp_path, capsys):
+    out = tmp_path / 'tared'
+    assert simulate_main([str(out), '--trials', '2', '--seed', '4', '--conditions', 'paper',
+                          '--tared', 'all', '--quiet']) == 0
+    manifest = read_manifest(out)
+    assert manifest['settings']['tared'] == 'all'
+    assert [t['params']['family']['tared'] for t in manifest['trials']] == [True, True]
+    force = read_wrench(out / 'trial_0000').force
+    assert np.linalg.norm(force[20:60].mean(axis=0)) < 0.05  # tared at rest
+    with pytest.raises(ConfigError, match='tared must be one of'):
+        simulate_trial(seed=1, index=0, tared='sometimes')
+    with pytest.raises(SystemExit) as exc:
+        simulate_main([str(tmp_path / 'x'), '--tared', 'sometimes'])
     assert exc.value.code == 2
     assert 'invalid choice' in capsys.readouterr().err
     assert not (tmp_path / 'x').exists()
