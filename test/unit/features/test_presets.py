@@ -54,13 +54,16 @@ def test_shipped_ft_model_has_the_columns_it_was_chosen_with_and_trains_defaults
     assert set(CARRIED_FEATURES) <= set(config.feature_names)
 
 
-def test_shipped_ft_model_trained_on_the_augmented_wrenches_it_was_chosen_with() -> None:
+def test_shipped_models_trained_on_the_augmented_wrenches_they_were_chosen_with() -> None:
     # docs/decisions/2026-11-24-ft-only-augmentation.md: chosen as sweep --lofo's
     # ft-only+signed+carried+aug with --augment-tare 0.5 --augment-torque 0.333,3
-    # (tools/build_ft_model.sh); the multimodal model trains on the wrenches as simulated
+    # (tools/build_ft_model.sh); the multimodal model with a tare on a quarter of its trials and
+    # no lever-arm scale (docs/decisions/2026-11-24-tared-sensors-everywhere.md, candidate B)
     chosen = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
     assert load_bundle(path=default_ft_model_path()).training['augmentation'] == chosen.to_dict()
-    assert load_bundle(path=default_model_path()).training['augmentation'] is None
+    multimodal = WrenchAugmentation(tare_probability=0.25, torque_scale=(1.0, 1.0))
+    assert (load_bundle(path=default_model_path()).training['augmentation']
+            == multimodal.to_dict())
 
 
 def test_shipped_ft_model_releases_by_the_rule_it_was_chosen_with() -> None:
