@@ -100,7 +100,10 @@ def plot_recordings(*, path: Path, results: Dict[str, dict]) -> int:
         if names else []
     if not bags:
         return 0
-    fig, axes = plt.subplots(len(bags), 1, figsize=(8, 0.9 + 0.45 * len(names) * len(bags)),
+    # a row needs room for its title and tick labels even with one detector, else
+    # tight_layout gives up with a warning and the rows overlap
+    row_inches = max(0.8, 0.45 * len(names))
+    fig, axes = plt.subplots(len(bags), 1, figsize=(8, 0.9 + row_inches * len(bags)),
                              squeeze=False)
     markers = 'ovs^Dx'
     for ax, bag in zip(axes[:, 0], bags):
