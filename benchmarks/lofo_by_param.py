@@ -31,18 +31,15 @@ import argparse
 from dataclasses import replace
 import json
 from pathlib import Path
-import pickle
 import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.features.config import EXTRA_FEATURES
-from contact_detector.io.bags import find_bags
-from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
-from contact_detector.training.sweep import (compute_frames, decode_bags, FeatureSetting,
-                                             fit_forest)
+from contact_detector.training.sweep import FeatureSetting, fit_forest
+from lofo_frames import load_frames
 import numpy as np
 
 WARMUP_S = 0.5
@@ -89,19 +86,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
                      **LOFO_CONFIG_CHANGES.get(args.setting, {}))
-    frames = None
-    if args.cache is not None and args.cache.exists():
-        written, frames = pickle.loads(args.cache.read_bytes())
-        if written != config.to_dict():         # written with another feature configuration
-            frames = None
-    if frames is None:
-        trials = {}
-        for i, folder in enumerate(args.folders):
-            trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
-        frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
-                                wrench_rate=100.0, jobs=args.jobs)
-        if args.cache is not None:
-            args.cache.write_bytes(pickle.dumps((config.to_dict(), frames)))
+    frames = load_frames(folders=args.folders, config=config, cache=args.cache, jobs=args.jobs)
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
                  for f in args.folders]
     columns = LOFO_SETTINGS[args.setting] or DEFAULT_FEATURES.feature_names

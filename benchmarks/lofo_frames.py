@@ -1,0 +1,52 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The frames of the leave-one-family-out scripts (``lofo_early.py``, ``lofo_by_param.py``), cached.
+
+Not a benchmark: imported by those two scripts, which run from this folder.
+"""
+
+from pathlib import Path
+import pickle
+from typing import Dict, Optional, Sequence
+
+from contact_detector.features.config import FeatureConfig
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.training.sweep import compute_frames, decode_bags
+
+
+def load_frames(*, folders: Sequence[Path], config: FeatureConfig, cache: Optional[Path],
+                jobs: int) -> Dict[str, object]:
+    """
+    Return every trial's frames of ``folders`` under ``config``, keyed as ``compute_frames``.
+
+    The simulator's bags: F/T at 100 Hz, audio at 16 kHz. ``cache`` (a pickle of the
+    configuration and the frames) is read when it was written with the same configuration,
+    else the frames are computed and written there.
+    """
+    if cache is not None and cache.exists():
+        written, frames = pickle.loads(cache.read_bytes())
+        # a cache written with another feature configuration, or by an older script, is stale
+        if written == config.to_dict() and isinstance(frames, dict):
+            return frames
+    trials = {}
+    for i, folder in enumerate(folders):
+        trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
+    frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
+                            wrench_rate=100.0, jobs=jobs)
+    if cache is not None:
+        cache.write_bytes(pickle.dumps((config.to_dict(), frames)))
+    return frames
