@@ -49,6 +49,10 @@ class Truth:
     impacts : tuple of (float, str, bool)
         Exogenous impacts: time (start), kind ('hand', 'table', 'touch', 'brush', 'setdown'),
         whether the object was in the air. Every kind is blamed the same way.
+    phases : tuple of (str, float)
+        The motion's phases in time order, each its name ('rest', 'lift', 'hold',
+        'accelerate', 'descend', ...) and start time, seconds, when known (a simulated
+        trial's manifest); empty otherwise.
 
     """
 
@@ -57,6 +61,7 @@ class Truth:
     onset_t: float
     contact_end_t: Optional[float] = None
     impacts: tuple = ()
+    phases: tuple = ()
 
 
 @dataclass
@@ -76,6 +81,9 @@ class Outcome:
     # What a premature release followed: the kind of the newest exogenous event that started
     # at most IMPACT_WINDOW_S[1] before it ('hand', 'touch', 'brush', ...), or 'none'.
     premature_after: Optional[str] = None
+    # The motion phase a premature release fell in ('lift', 'descend', ...), when the truth
+    # has phases: a release during the lift is one a robot that arms after the lift avoids.
+    premature_phase: Optional[str] = None
 
 
 def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[float],
@@ -111,9 +119,10 @@ def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[flo
         verdict, latency = 'late', release - truth.onset_t
     contact_end = truth.contact_end_t if truth.contact_end_t is not None else (
         truth.onset_t + late_s)
-    cause = None
+    cause = phase = None
     if verdict == 'premature':
         cause = premature_cause(truth=truth, release_t=release)
+        phase = phase_at(truth=truth, t=release)
     blamed = 0
     for t in events:
         if truth.onset_t - tolerance_s <= t <= contact_end:
@@ -125,7 +134,31 @@ def score_trial(*, truth: Truth, releases: Sequence[float], events: Sequence[flo
                    release_t=release, latency_s=latency, verdict=verdict, impact_events=blamed,
                    impacts=len(truth.impacts),
                    impacts_in_air=sum(1 for _, _, air in truth.impacts if air),
-                   premature_after=cause)
+                   premature_after=cause, premature_phase=phase)
+
+
+def phase_at(*, truth: Truth, t: float) -> Optional[str]:
+    """
+    Name the motion phase that time ``t`` falls in.
+
+    Parameters
+    ----------
+    truth : Truth
+        Ground truth with its phases (name, start time).
+    t : float
+        Time, seconds (bag time).
+
+    Returns
+    -------
+    str or None
+        The name of the last phase that started at or before ``t`` (the first phase's name
+        before it starts), or None when the truth has no phases.
+
+    """
+    if not truth.phases:
+        return None
+    started = [name for name, start in truth.phases if start <= t]
+    return started[-1] if started else truth.phases[0][0]
 
 
 def premature_cause(*, truth: Truth, release_t: float) -> str:
@@ -229,23 +262,40 @@ def summarize(outcomes: Sequence[Outcome]) -> Dict[str, object]:
         'latency_ms_p95': float(np.percentile(latencies, 95) * 1000) if latencies.size else None,
         'latency_ms_max': float(latencies.max() * 1000) if latencies.size else None,
         'premature_after': premature_counts(outcomes),
+        'premature_phase': premature_counts(outcomes, by='premature_phase'),
     }
     return summary
 
 
-def premature_counts(outcomes: Sequence[Outcome]) -> Dict[str, int]:
-    """Count premature releases by the event they followed (:func:`premature_cause`)."""
+def premature_counts(outcomes: Sequence[Outcome], *,
+                     by: str = 'premature_after') -> Dict[str, int]:
+    """
+    Count premature releases by an Outcome field.
+
+    ``by='premature_after'``: the event they followed (:func:`premature_cause`; none =
+    'none'); ``by='premature_phase'``: the motion phase they fell in (:func:`phase_at`;
+    trials without phases are left out).
+    """
     counts: Dict[str, int] = {}
     for o in outcomes:
-        if o.verdict == 'premature':
-            key = o.premature_after or 'none'
-            counts[key] = counts.get(key, 0) + 1
+        if o.verdict != 'premature':
+            continue
+        key = getattr(o, by)
+        if key is None and by == 'premature_phase':
+            continue
+        key = key or 'none'
+        counts[key] = counts.get(key, 0) + 1
     return dict(sorted(counts.items()))
 
 
-def premature_text(summary: Dict[str, object]) -> str:
-    """Return ``summary``'s premature count with its causes, e.g. ``'3 (brush 2, touch 1)'``."""
-    causes = summary.get('premature_after') or {}
+def premature_text(summary: Dict[str, object], *, by: str = 'premature_after') -> str:
+    """
+    Return ``summary``'s premature count with its causes, e.g. ``'3 (brush 2, touch 1)'``.
+
+    ``by='premature_phase'`` gives the motion phases instead, e.g. ``'3 (lift 2, descend 1)'``;
+    without phases (recordings, not simulated trials), the count alone.
+    """
+    causes = summary.get(by) or {}
     if not causes:
         return str(summary['premature'])
     return f"{summary['premature']} ({', '.join(f'{k} {v}' for k, v in causes.items())})"

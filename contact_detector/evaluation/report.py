@@ -129,13 +129,21 @@ def plot_recordings(*, path: Path, results: Dict[str, dict]) -> int:
 
 
 def condition_table(result: dict) -> str:
-    """Per-condition breakdown of one detector; premature releases with what they followed."""
+    """
+    Per-condition breakdown of one detector.
+
+    Premature releases with what they followed and, for simulated trials, the motion phase
+    they fell in.
+    """
     lines = ['| condition | trials | detected | missed | late | premature (after) | '
-             'latency median [ms] | impact events |', '|---|---|---|---|---|---|---|---|']
+             'premature (phase) | latency median [ms] | impact events |',
+             '|---|---|---|---|---|---|---|---|---|']
     for condition, s in result['summary'].items():
         median = '-' if s['latency_ms_median'] is None else f"{s['latency_ms_median']:.0f}"
         lines.append(f"| {condition} | {s['trials']} | {s['detected']} | {s['missed']} | "
-                     f"{s['late']} | {premature_text(s)} | {median} | {s['impact_events']} |")
+                     f"{s['late']} | {premature_text(s)} | "
+                     f"{premature_text(s, by='premature_phase')} | {median} | "
+                     f"{s['impact_events']} |")
     return '\n'.join(lines)
 
 

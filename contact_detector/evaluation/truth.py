@@ -45,7 +45,9 @@ def truth_for(bag: Path, events, manifest: dict) -> Truth:
         return Truth(name=bag.name, condition=info.get('condition', ''),
                      onset_t=float(info['onset_t']), contact_end_t=info.get('contact_end_t'),
                      impacts=tuple((float(i['t']), i['kind'], bool(i['in_air']))
-                                   for i in info.get('impacts', [])))
+                                   for i in info.get('impacts', [])),
+                     phases=tuple((str(name), float(start))
+                                  for name, start, *_ in info.get('phases', [])))
     onsets = truth_onsets(events)
     if not onsets:
         raise BagError(f'{bag}: no manifest entry and no True on /contact_truth')

@@ -36,8 +36,9 @@ from contact_detector.detection import factory
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.baselines import BASELINES, make_baseline
-from contact_detector.evaluation.metrics import (frame_labels, score_trial, summarize,
+from contact_detector.evaluation.metrics import (frame_labels, phase_at, score_trial, summarize,
                                                  summarize_by_condition, Truth)
+from contact_detector.evaluation.truth import conditions_of, truth_for
 from contact_detector.io import node_params
 from contact_detector.io.bags import jazzy_typestore, open_reader
 from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, WrenchEvent)
@@ -381,6 +382,21 @@ def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
     assert [r['name'] for r in rows] == ['trial_0000', 'trial_0000']
     assert abs(onsets[0] - onsets[1]) > 0.05
     assert [r['onset_t'] for r in rows] == pytest.approx(onsets, rel=0, abs=1e-6)
+
+
+def test_evaluate_reads_each_simulated_trials_motion_phases(tmp_path):
+    # a premature release is reported with the phase it fell in (the lift, the descent, ...)
+    trials = list(simulate_trials(n=1, seed=SEED + 2, conditions=['heavy']))
+    for trial in trials:
+        write_trial_bag(trial=trial, path=tmp_path / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=tmp_path)
+    bag = tmp_path / trials[0].name
+    truth = truth_for(bag, [], conditions_of([bag]))
+    assert [name for name, _ in truth.phases] == [name for name, _, _ in trials[0].phases]
+    lift_start = dict(truth.phases)['lift']
+    assert phase_at(truth=truth, t=lift_start + 0.01) == 'lift'
+    outcome = score_trial(truth=truth, releases=[lift_start + 0.2], events=[])
+    assert (outcome.verdict, outcome.premature_phase) == ('premature', 'lift')
 
 
 # --- metrics on hand-made truths ----------------------------------------------------------------

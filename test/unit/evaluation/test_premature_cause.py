@@ -45,3 +45,29 @@ def test_summary_and_tables_count_premature_releases_by_cause():
     assert premature_text(summarize([_outcome(10.05)])) == '0'
     table = condition_table({'summary': {'exogenous': summary}})
     assert '| exogenous | 5 | 1 | 0 | 0 | 4 (brush 1, hand 1, none 1, touch 1) |' in table
+
+
+PHASES = (('rest', 0.0), ('lift', 1.5), ('hold', 2.6), ('descend', 3.5), ('push', 10.0))
+
+
+def _phased(release: float):
+    truth = Truth(name=f'p{release}', condition='heavy', onset_t=10.0, contact_end_t=11.0,
+                  impacts=IMPACTS, phases=PHASES)
+    return score_trial(truth=truth, releases=[release], events=[release])
+
+
+def test_a_premature_release_is_placed_in_the_motion_phase_it_fell_in():
+    # a release during the lift is one that arming after the lift (docs/node.md) avoids
+    assert _phased(2.1).premature_phase == 'lift'
+    assert _phased(0.7).premature_phase == 'rest'
+    assert _phased(6.0).premature_phase == 'descend'
+    assert _phased(10.05).premature_phase is None       # not premature
+    assert _outcome(2.1).premature_phase is None        # no phases known: no phase
+    summary = summarize([_phased(2.1), _phased(2.2), _phased(6.0), _phased(10.05),
+                         _outcome(4.2)])
+    assert summary['premature'] == 4
+    assert summary['premature_phase'] == {'descend': 1, 'lift': 2}   # the unphased left out
+    table = condition_table({'summary': {'heavy': summary}})
+    assert '| heavy | 5 | 1 | 0 | 0 | 4 (brush 1, hand 2, none 1) | 4 (descend 1, lift 2) |' \
+        in table
+    assert summarize([_outcome(2.1)])['premature_phase'] == {}
