@@ -136,7 +136,10 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
     carried_names = set(CARRIED_FEATURES) | set(CARRIED_DERIVED)
-    if set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names):
+    # the vector shift's longer baseline only when a feature uses it: without one, the first
+    # frames have too little history for it (its median would be of an empty slice)
+    shifted = bool(set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names))
+    if shifted:
         need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
     if set(deltas) & carried_names:
         need = max(need, config.carried_window)
@@ -175,6 +178,7 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
             recent = changes[-config.change_max_frames:]
             derived['force_change_max'] = max(c[0] for c in recent)
             derived['torque_change_max'] = max(c[1] for c in recent)
+        if shifted:
             # the vector change against the per-axis median baseline, force then torque
             w, lag, b = config.delta_window, config.shift_lag, config.shift_window
             new_v = dec[end - w + 1:end + 1].mean(axis=0)
