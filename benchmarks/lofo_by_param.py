@@ -34,6 +34,7 @@ from pathlib import Path
 import sys
 
 from contact_detector.detection.release import ReleaseLogic
+from contact_detector.evaluation.metrics import score_trial
 from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
@@ -43,14 +44,8 @@ from lofo_frames import load_frames
 import numpy as np
 
 WARMUP_S = 0.5
-CAUGHT_S = 0.5
-
-
-def verdict(*, release_t: float | None, onset_t: float) -> str:
-    """Return 'caught', 'early' or 'missed' (no release within 500 ms after the onset)."""
-    if release_t is None or release_t - onset_t > CAUGHT_S:
-        return 'missed'
-    return 'early' if release_t < onset_t else 'caught'
+# score_trial's verdicts, as sweep --lofo counts them
+VERDICTS = {'detected': 'caught', 'premature': 'early', 'late': 'missed', 'missed': 'missed'}
 
 
 def param_of(trial: dict, name: str) -> object:
@@ -104,9 +99,8 @@ def main(argv=None) -> int:
             logic = ReleaseLogic(rule=DEFAULT_RULE, armed=True)
             _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
                                      blocked=f.t < f.t0 + WARMUP_S)
-            first = (float(np.atleast_1d(releases)[0])
-                     if releases is not None and np.size(releases) else None)
-            results[key].append(verdict(release_t=first, onset_t=f.truth.onset_t))
+            outcome = score_trial(truth=f.truth, releases=releases, events=())
+            results[key].append(VERDICTS[outcome.verdict])
     keys = sorted(test)
     values = []
     for key in keys:

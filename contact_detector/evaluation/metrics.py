@@ -272,19 +272,15 @@ def premature_counts(outcomes: Sequence[Outcome], *,
     """
     Count premature releases by an Outcome field.
 
-    ``by='premature_after'``: the event they followed (:func:`premature_cause`; none =
-    'none'); ``by='premature_phase'``: the motion phase they fell in (:func:`phase_at`;
-    trials without phases are left out).
+    ``by='premature_after'``: the event they followed (:func:`premature_cause`, 'none' when
+    none); ``by='premature_phase'``: the motion phase they fell in (:func:`phase_at`; trials
+    without phases have None and are left out).
     """
     counts: Dict[str, int] = {}
     for o in outcomes:
-        if o.verdict != 'premature':
-            continue
         key = getattr(o, by)
-        if key is None and by == 'premature_phase':
-            continue
-        key = key or 'none'
-        counts[key] = counts.get(key, 0) + 1
+        if o.verdict == 'premature' and key is not None:
+            counts[key] = counts.get(key, 0) + 1
     return dict(sorted(counts.items()))
 
 
