@@ -17,6 +17,7 @@ Which trials a left-out family loses, by one of the simulator's parameters.
 
     .venv/bin/python benchmarks/lofo_by_param.py DIR... --family geometry --param tared
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1] [--trials]
+        [--augment-tare P --augment-torque LOW,HIGH [--augment-cache aug.pkl]]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -24,7 +25,11 @@ Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10
 (a family parameter in the manifests' ``params.family``, else a trial parameter in
 ``params``; numbers are cut at their quartiles), the left-out trials caught within 500 ms,
 early and not caught, over the forests of ``--seeds``. ``--trials`` also prints every trial.
-``--cache`` keeps the computed frames for the next run on the same folders.
+``--cache`` keeps the computed frames for the next run on the same folders. With
+``--augment-tare`` the forests train on the other families' wrenches augmented as ``sweep --lofo
+--lofo-settings NAME+aug --augment-tare P --augment-torque LOW,HIGH`` trains them (the shipped
+protocol: ``--augment-tare 0.25 --augment-torque 1,1``); the left-out family is never
+augmented. ``--augment-cache`` keeps those frames.
 """
 
 import argparse
@@ -36,6 +41,7 @@ import sys
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
 from contact_detector.features.config import EXTRA_FEATURES
+from contact_detector.training.augmentation import WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
 from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
@@ -78,6 +84,9 @@ def main(argv=None) -> int:
     parser.add_argument('--cache', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=1)
     parser.add_argument('--trials', action='store_true')
+    parser.add_argument('--augment-tare', type=float, default=None)
+    parser.add_argument('--augment-torque', default='0.5,2')
+    parser.add_argument('--augment-cache', type=Path, default=None)
     args = parser.parse_args(argv)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
                      **LOFO_CONFIG_CHANGES.get(args.setting, {}))
@@ -88,7 +97,14 @@ def main(argv=None) -> int:
     setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
                              columns=tuple(columns))
     cols = [config.feature_names.index(c) for c in columns]
-    fit = [f for f in frames.values() if f.truth.condition != args.family]
+    fit_frames = frames
+    if args.augment_tare is not None:
+        low, high = (float(v) for v in args.augment_torque.split(','))
+        augmentation = WrenchAugmentation(tare_probability=args.augment_tare,
+                                          torque_scale=(low, high))
+        fit_frames = load_frames(folders=args.folders, config=config, cache=args.augment_cache,
+                                 jobs=args.jobs, augmentation=augmentation)
+    fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
     test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
     results = {k: [] for k in test}
     for seed in (int(s) for s in args.seeds.split(',')):
@@ -107,7 +123,9 @@ def main(argv=None) -> int:
         tag, name = key.split('/', 1)
         values.append(param_of(manifests[int(tag)].get(name, {}), args.param))
     labels = groups(values)
-    print(f'{len(fit)} training trials, {len(test)} left out ({args.family}), setting '
+    aug = '' if args.augment_tare is None else (f', augmented (tare {args.augment_tare}, '
+                                                 f'torque {args.augment_torque})')
+    print(f'{len(fit)} training trials{aug}, {len(test)} left out ({args.family}), setting '
           f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')
     print('|---|---|---|---|---|')

@@ -25,28 +25,32 @@ from typing import Dict, Optional, Sequence
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.training.augmentation import WrenchAugmentation
 from contact_detector.training.sweep import compute_frames, decode_bags
 
 
 def load_frames(*, folders: Sequence[Path], config: FeatureConfig, cache: Optional[Path],
-                jobs: int) -> Dict[str, object]:
+                jobs: int, augmentation: Optional[WrenchAugmentation] = None) -> Dict[str, object]:
     """
     Return every trial's frames of ``folders`` under ``config``, keyed as ``compute_frames``.
 
-    The simulator's bags: F/T at 100 Hz, audio at 16 kHz. ``cache`` (a pickle of the
-    configuration and the frames) is read when it was written with the same configuration,
-    else the frames are computed and written there.
+    The simulator's bags: F/T at 100 Hz, audio at 16 kHz. With ``augmentation`` every trial's
+    wrench is varied first, as ``sweep --lofo`` varies its training trials (``seed`` 0).
+    ``cache`` (a pickle of the configuration, the augmentation and the frames) is read when it
+    was written with the same ones, else the frames are computed and written there.
     """
+    key = (config.to_dict(), None if augmentation is None else augmentation.to_dict())
     if cache is not None and cache.exists():
         written, frames = pickle.loads(cache.read_bytes())
-        # a cache written with another feature configuration, or by an older script, is stale
-        if written == config.to_dict() and isinstance(frames, dict):
+        # a cache written with another configuration or augmentation, or by an older
+        # script, is stale
+        if written == key and isinstance(frames, dict):
             return frames
     trials = {}
     for i, folder in enumerate(folders):
         trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
     frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
-                            wrench_rate=100.0, jobs=jobs)
+                            wrench_rate=100.0, jobs=jobs, augmentation=augmentation)
     if cache is not None:
-        cache.write_bytes(pickle.dumps((config.to_dict(), frames)))
+        cache.write_bytes(pickle.dumps((key, frames)))
     return frames
