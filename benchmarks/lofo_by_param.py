@@ -123,8 +123,9 @@ def main(argv=None) -> int:
         tag, name = key.split('/', 1)
         values.append(param_of(manifests[int(tag)].get(name, {}), args.param))
     labels = groups(values)
-    aug = '' if args.augment_tare is None else (f', augmented (tare {args.augment_tare}, '
-                                                 f'torque {args.augment_torque})')
+    aug = ''
+    if args.augment_tare is not None:
+        aug = f', augmented (tare {args.augment_tare}, torque {args.augment_torque})'
     print(f'{len(fit)} training trials{aug}, {len(test)} left out ({args.family}), setting '
           f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')
