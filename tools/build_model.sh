@@ -3,9 +3,11 @@
 # simulator families, seed 11, and 10 more of each in which every exogenous event is any of a
 # knock on the hand or the table, a touch, a brush or a set-down: seed 12, --events everywhere
 # --hits mixed, docs/decisions/2026-11-24-events-in-every-family.md), then train with the
-# defaults chosen by leave-one-family-out (docs/generalisation.md) and a tared sensor on a
-# quarter of the training trials, in every family (--augment-tare 0.25, no lever-arm scale:
-# docs/decisions/2026-11-24-tared-sensors-everywhere.md). Usage:
+# defaults chosen by leave-one-family-out (docs/generalisation.md; the rule p >= 0.95 or a
+# 15-frame mean >= 0.4) and augmented training wrenches, in every family: a tared sensor on a
+# quarter of the trials (--augment-tare 0.25, docs/decisions/2026-11-24-tared-sensors-
+# everywhere.md) and lever arms x0.5-2 (--augment-torque 0.5,2,
+# docs/decisions/2026-11-24-lever-arm-augmentation.md). Usage:
 # tools/build_model.sh [TRAIN_DIR [EXTRA_DIR]] (default data/train, data/train_extra). Writes
 # models/contact_forest.npz (loads with numpy alone), its card and report.
 set -euo pipefail
@@ -19,4 +21,4 @@ extra="${2:-$root/data/train_extra}"
 .venv/bin/contact-detector simulate "$extra" --trials 120 --seed 12 --conditions wide \
   --events everywhere --hits mixed --overwrite --quiet
 .venv/bin/contact-detector train "$data" "$extra" --out models/contact_forest.npz \
-  --report models/report --jobs 2 --seed 0 --augment --augment-tare 0.25 --augment-torque 1,1
+  --report models/report --jobs 2 --seed 0 --augment --augment-tare 0.25 --augment-torque 0.5,2
