@@ -17,7 +17,8 @@ Which trials a left-out family loses, by one of the simulator's parameters.
 
     .venv/bin/python benchmarks/lofo_by_param.py DIR... --family geometry --param tared
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1] [--trials]
-        [--augment-tare P --augment-torque LOW,HIGH [--augment-cache aug.pkl]]
+        [--setting shipped+aug --augment-tare P --augment-torque LOW,HIGH
+         [--augment-cache aug.pkl]]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -25,11 +26,11 @@ Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10
 (a family parameter in the manifests' ``params.family``, else a trial parameter in
 ``params``; numbers are cut at their quartiles), the left-out trials caught within 500 ms,
 early and not caught, over the forests of ``--seeds``. ``--trials`` also prints every trial.
-``--cache`` keeps the computed frames for the next run on the same folders. With
-``--augment-tare`` the forests train on the other families' wrenches augmented as ``sweep --lofo
---lofo-settings NAME+aug --augment-tare P --augment-torque LOW,HIGH`` trains them (the shipped
-protocol: ``--augment-tare 0.25 --augment-torque 1,1``); the left-out family is never
-augmented. ``--augment-cache`` keeps those frames.
+``--cache`` keeps the computed frames for the next run on the same folders. A setting named
+``NAME+aug`` trains the forests on the other families' wrenches augmented by ``--augment-tare``
+and ``--augment-torque``, as ``sweep --lofo --lofo-settings NAME+aug`` does (the shipped
+protocol: ``--setting shipped+aug --augment-tare 0.25 --augment-torque 0.5,2``); the left-out
+family is never augmented. ``--augment-cache`` keeps those frames.
 """
 
 import argparse
@@ -38,15 +39,17 @@ import json
 from pathlib import Path
 import sys
 
+from contact_detector.cli.model_options import (add_augmentation_arguments,
+                                                augmentation_from_args)
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
 from contact_detector.features.config import EXTRA_FEATURES
-from contact_detector.training.augmentation import WrenchAugmentation
+from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
+from contact_detector.training.recipe import DEFAULT_FEATURES
 from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
 from contact_detector.training.sweep import FeatureSetting, fit_forest
-from lofo_frames import load_frames
+from lofo_frames import add_rule_argument, load_frames, rule_from
 import numpy as np
 
 WARMUP_S = 0.5
@@ -79,31 +82,31 @@ def main(argv=None) -> int:
     parser.add_argument('folders', nargs='+', type=Path)
     parser.add_argument('--family', default='geometry')
     parser.add_argument('--param', default='tared')
-    parser.add_argument('--setting', default='shipped', choices=sorted(LOFO_SETTINGS))
+    parser.add_argument('--setting', default='shipped',
+                        choices=sorted([*LOFO_SETTINGS, *(s + AUGMENTED for s in LOFO_SETTINGS)]))
     parser.add_argument('--seeds', default='0,1,2')
     parser.add_argument('--cache', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=1)
+    add_rule_argument(parser)
     parser.add_argument('--trials', action='store_true')
-    parser.add_argument('--augment-tare', type=float, default=None)
-    parser.add_argument('--augment-torque', default='0.5,2')
+    add_augmentation_arguments(parser)
     parser.add_argument('--augment-cache', type=Path, default=None)
     args = parser.parse_args(argv)
+    augmented = args.setting.endswith(AUGMENTED)
+    base = args.setting.removesuffix(AUGMENTED)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
-                     **LOFO_CONFIG_CHANGES.get(args.setting, {}))
+                     **LOFO_CONFIG_CHANGES.get(base, {}))
     frames = load_frames(folders=args.folders, config=config, cache=args.cache, jobs=args.jobs)
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
                  for f in args.folders]
-    columns = LOFO_SETTINGS[args.setting] or DEFAULT_FEATURES.feature_names
+    columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
     setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
                              columns=tuple(columns))
     cols = [config.feature_names.index(c) for c in columns]
     fit_frames = frames
-    if args.augment_tare is not None:
-        low, high = (float(v) for v in args.augment_torque.split(','))
-        augmentation = WrenchAugmentation(tare_probability=args.augment_tare,
-                                          torque_scale=(low, high))
+    if augmented:
         fit_frames = load_frames(folders=args.folders, config=config, cache=args.augment_cache,
-                                 jobs=args.jobs, augmentation=augmentation)
+                                 jobs=args.jobs, augmentation=augmentation_from_args(args))
     fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
     test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
     results = {k: [] for k in test}
@@ -112,7 +115,7 @@ def main(argv=None) -> int:
                             jobs=args.jobs)
         for key, f in test.items():
             p = forest.predict_proba(f.x[:, cols])[:, 1]
-            logic = ReleaseLogic(rule=DEFAULT_RULE, armed=True)
+            logic = ReleaseLogic(rule=rule_from(args), armed=True)
             _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
                                      blocked=f.t < f.t0 + WARMUP_S)
             outcome = score_trial(truth=f.truth, releases=releases, events=())
@@ -124,8 +127,8 @@ def main(argv=None) -> int:
         values.append(param_of(manifests[int(tag)].get(name, {}), args.param))
     labels = groups(values)
     aug = ''
-    if args.augment_tare is not None:
-        aug = f', augmented (tare {args.augment_tare}, torque {args.augment_torque})'
+    if augmented:
+        aug = f', augmented ({augmentation_from_args(args).to_dict()})'
     print(f'{len(fit)} training trials{aug}, {len(test)} left out ({args.family}), setting '
           f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')

@@ -44,10 +44,10 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE
+from contact_detector.training.recipe import DEFAULT_FEATURES
 from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
 from contact_detector.training.sweep import FeatureSetting, fit_forest
-from lofo_frames import load_frames
+from lofo_frames import add_rule_argument, load_frames, rule_from
 import numpy as np
 
 WARMUP_S = 0.5
@@ -72,6 +72,7 @@ def main(argv=None) -> int:
     parser.add_argument('--seeds', default='0,1,2')
     parser.add_argument('--cache', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=1)
+    add_rule_argument(parser)
     args = parser.parse_args(argv)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
                      **LOFO_CONFIG_CHANGES.get(args.setting, {}))
@@ -98,7 +99,7 @@ def main(argv=None) -> int:
                             jobs=args.jobs)
         for f in test:
             p = forest.predict_proba(f.x[:, cols])[:, 1]
-            logic = ReleaseLogic(rule=DEFAULT_RULE, armed=True)
+            logic = ReleaseLogic(rule=rule_from(args), armed=True)
             _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
                                      blocked=f.t < f.t0 + WARMUP_S)
             rel = [float(r) for r in np.atleast_1d(releases)] if releases is not None else []

@@ -15,9 +15,13 @@
 """
 The frames of the leave-one-family-out scripts (``lofo_early.py``, ``lofo_by_param.py``), cached.
 
-Not a benchmark: imported by those two scripts, which run from this folder.
+Not a benchmark: imported by those two scripts, which run from this folder. Also their rule:
+the shipped one, with ``--sustain-threshold`` to score the slow path a figure was measured with
+(0.3 before the lever-arm augmentation, docs/decisions/2026-11-24-lever-arm-augmentation.md).
 """
 
+import argparse
+from dataclasses import replace
 from pathlib import Path
 import pickle
 from typing import Dict, Optional, Sequence
@@ -25,8 +29,24 @@ from typing import Dict, Optional, Sequence
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import WrenchAugmentation
+from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.sweep import compute_frames, decode_bags
+
+
+def add_rule_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--sustain-threshold``: the slow path of the scored rule (default: shipped)."""
+    parser.add_argument('--sustain-threshold', type=float,
+                        default=DEFAULT_RULE.sustain_threshold,
+                        help='slow-path threshold of the scored rule (default: the shipped '
+                             f'{DEFAULT_RULE.sustain_threshold:g}; 0.3 before the lever-arm '
+                             'augmentation)')
+
+
+def rule_from(args: argparse.Namespace) -> DecisionRule:
+    """Return the shipped rule with the slow path of ``--sustain-threshold``."""
+    return replace(DEFAULT_RULE, sustain_threshold=args.sustain_threshold)
 
 
 def load_frames(*, folders: Sequence[Path], config: FeatureConfig, cache: Optional[Path],

@@ -58,7 +58,7 @@ def test_shipped_models_trained_on_the_augmented_wrenches_they_were_chosen_with(
     # docs/decisions/2026-11-24-ft-only-augmentation.md: chosen as sweep --lofo's
     # ft-only+signed+carried+aug with --augment-tare 0.5 --augment-torque 0.333,3
     # (tools/build_ft_model.sh); the multimodal model with a tare on a quarter of its trials and
-    # no lever-arm scale (docs/decisions/2026-11-24-tared-sensors-everywhere.md, candidate B)
+    # lever arms x0.5-2 (docs/decisions/2026-11-24-lever-arm-augmentation.md, candidate D)
     chosen = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
     assert load_bundle(path=default_ft_model_path()).training['augmentation'] == chosen.to_dict()
     multimodal = WrenchAugmentation(tare_probability=0.25, torque_scale=(0.5, 2.0))
