@@ -39,12 +39,10 @@ import json
 from pathlib import Path
 import sys
 
-from contact_detector.cli.model_options import (add_augmentation_arguments,
-                                                augmentation_from_args)
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
 from contact_detector.features.config import EXTRA_FEATURES
-from contact_detector.training.augmentation import AUGMENTED
+from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_FEATURES
 from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
@@ -89,9 +87,17 @@ def main(argv=None) -> int:
     parser.add_argument('--jobs', type=int, default=1)
     add_rule_argument(parser)
     parser.add_argument('--trials', action='store_true')
-    add_augmentation_arguments(parser)
+    # the options of train and sweep (cli/model_options.py, which a benchmark does not import),
+    # with WrenchAugmentation's defaults and its validation
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability)
+    parser.add_argument('--augment-torque', default=','.join(
+        f'{v:g}' for v in WrenchAugmentation.torque_scale))
     parser.add_argument('--augment-cache', type=Path, default=None)
     args = parser.parse_args(argv)
+    augmentation = WrenchAugmentation(
+        tare_probability=args.augment_tare,
+        torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
     augmented = args.setting.endswith(AUGMENTED)
     base = args.setting.removesuffix(AUGMENTED)
     config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
@@ -106,7 +112,7 @@ def main(argv=None) -> int:
     fit_frames = frames
     if augmented:
         fit_frames = load_frames(folders=args.folders, config=config, cache=args.augment_cache,
-                                 jobs=args.jobs, augmentation=augmentation_from_args(args))
+                                 jobs=args.jobs, augmentation=augmentation)
     fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
     test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
     results = {k: [] for k in test}
@@ -128,7 +134,7 @@ def main(argv=None) -> int:
     labels = groups(values)
     aug = ''
     if augmented:
-        aug = f', augmented ({augmentation_from_args(args).to_dict()})'
+        aug = f', augmented ({augmentation.to_dict()})'
     print(f'{len(fit)} training trials{aug}, {len(test)} left out ({args.family}), setting '
           f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')
