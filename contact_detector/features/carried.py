@@ -91,9 +91,13 @@ class CarriedLoad:
                     'while it was measured, so the carried-load features compare load '
                     'changes with the wrong load')
         if self.below_floor:
+            # the cost and the remedy: with the load tared away a slow contact looks like a
+            # push from nothing (docs/node.md has the figures)
             return (text + f'; below {self.floor[0]:g} N, read as a tared sensor (the '
                     'carried-load cosines are 0; an untared sensor reads this with an empty '
-                    'hand)')
+                    'hand). A sensor tared while the hand holds the object costs slow '
+                    'contacts: they are released later or not at all; zero it with the '
+                    'empty hand instead if the robot can')
         return text
 
 

@@ -66,7 +66,9 @@ def test_a_grasp_during_the_measurement_has_moved():
 def test_a_tared_sensor_or_an_empty_hand_is_below_the_floor():
     got = measure_carried_load(rows=_held(weight_n=0.0), floor=FLOOR)
     assert got.below_floor and got.steady and got.status == 'below-floor'
+    # the line says what a tare costs and what to do about it
     assert 'read as a tared sensor' in got.describe()
+    assert 'zero it with the empty hand' in got.describe()
 
 
 def test_the_load_is_the_per_axis_median_the_features_use():
