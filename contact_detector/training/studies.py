@@ -88,6 +88,7 @@ LOFO_SETTINGS = {
     # the shipped columns with the recent audio peak held over 0.3 s instead of 0.1 s: a slow
     # transfer's click is then still in view while its load moves (issue #14)
     'peak30': tuple(DEFAULT_FEATURES.feature_names),
+    'peak20': tuple(DEFAULT_FEATURES.feature_names),
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
@@ -95,13 +96,15 @@ LOFO_SETTINGS = {
 #: feature frames, so that a knock on the hand 0.2-0.5 s before a touch has left it; ``+w32``:
 #: the F/T spectra over 32 samples instead of 64, so that they forget a knock's ringing sooner;
 #: ``scrape4``, ``scrape8``: ``audio_hold_db`` over 4 or 8 audio frames, 40 or 80 ms;
-#: ``peak30``: ``audio_peak_rel_db`` and ``audio_peak_gap_db`` over 30 audio frames, not 10).
+#: ``peak20``, ``peak30``: ``audio_peak_rel_db`` and ``audio_peak_gap_db`` over 20 or 30 audio
+#: frames, not 10).
 LOFO_CONFIG_CHANGES = {
     'ft-only+signed+max20': {'change_max_frames': 20},
     'ft-only+signed+max30': {'change_max_frames': 30},
     'ft-only+signed+w32': {'ft_window': 32},
     'scrape4': {'audio_hold_frames': 4},
     'scrape8': {'audio_hold_frames': 8},
+    'peak20': {'peak_frames': 20},
     'peak30': {'peak_frames': 30},
 }
 
