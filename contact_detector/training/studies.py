@@ -85,8 +85,8 @@ LOFO_SETTINGS = {
     # brush scrapes for 0.15-0.6 s, a touch clicks for tens of ms (issue #14)
     'scrape4': tuple(DEFAULT_FEATURES.feature_names) + ('audio_hold_db',),
     'scrape8': tuple(DEFAULT_FEATURES.feature_names) + ('audio_hold_db',),
-    # the shipped columns with the recent audio peak held over 0.3 s instead of 0.1 s: a slow
-    # transfer's click is then still in view while its load moves (issue #14)
+    # the shipped columns with the recent audio peak held over 0.3 or 0.2 s instead of 0.1 s:
+    # a slow transfer's click is then still in view while its load moves (issue #14)
     'peak30': tuple(DEFAULT_FEATURES.feature_names),
     'peak20': tuple(DEFAULT_FEATURES.feature_names),
 }
