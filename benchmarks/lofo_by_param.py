@@ -34,19 +34,16 @@ family is never augmented. ``--augment-cache`` keeps those frames.
 """
 
 import argparse
-from dataclasses import replace
 import json
 from pathlib import Path
 import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
-from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import DEFAULT_FEATURES
-from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
-from contact_detector.training.sweep import FeatureSetting, fit_forest
+from contact_detector.training.studies import lofo_setting, LOFO_SETTINGS
+from contact_detector.training.sweep import fit_forest
 from lofo_frames import add_rule_argument, load_frames, rule_from
 import numpy as np
 
@@ -98,17 +95,12 @@ def main(argv=None) -> int:
     augmentation = WrenchAugmentation(
         tare_probability=args.augment_tare,
         torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
-    augmented = args.setting.endswith(AUGMENTED)
-    base = args.setting.removesuffix(AUGMENTED)
-    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
-                     **LOFO_CONFIG_CHANGES.get(base, {}))
+    setting, augmented = lofo_setting(args.setting, label=LabelWindow(0.0, 0.3))
+    config = setting.config
     frames = load_frames(folders=args.folders, config=config, cache=args.cache, jobs=args.jobs)
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
                  for f in args.folders]
-    columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
-    setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
-                             columns=tuple(columns))
-    cols = [config.feature_names.index(c) for c in columns]
+    cols = [config.feature_names.index(c) for c in setting.columns]
     fit_frames = frames
     if augmented:
         fit_frames = load_frames(folders=args.folders, config=config, cache=args.augment_cache,

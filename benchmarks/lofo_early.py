@@ -36,17 +36,14 @@ written with another one is recomputed) for the next run on the same folders.
 """
 
 import argparse
-from dataclasses import replace
 from pathlib import Path
 import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import frame_labels
-from contact_detector.features.config import EXTRA_FEATURES
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import DEFAULT_FEATURES
-from contact_detector.training.studies import LOFO_CONFIG_CHANGES, LOFO_SETTINGS
-from contact_detector.training.sweep import FeatureSetting, fit_forest
+from contact_detector.training.studies import lofo_setting, LOFO_SETTINGS
+from contact_detector.training.sweep import fit_forest
 from lofo_frames import add_rule_argument, load_frames, rule_from
 import numpy as np
 
@@ -74,13 +71,10 @@ def main(argv=None) -> int:
     parser.add_argument('--jobs', type=int, default=1)
     add_rule_argument(parser)
     args = parser.parse_args(argv)
-    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
-                     **LOFO_CONFIG_CHANGES.get(args.setting, {}))
+    setting, _ = lofo_setting(args.setting, label=LabelWindow(0.0, 0.3))
+    config = setting.config
     frames = list(load_frames(folders=args.folders, config=config, cache=args.cache,
                               jobs=args.jobs).values())
-    columns = LOFO_SETTINGS[args.setting] or DEFAULT_FEATURES.feature_names
-    setting = FeatureSetting(args.setting, config, LabelWindow(0.0, 0.3),
-                             columns=tuple(columns))
     names = config.feature_names
     shown = [n for n in SHOWN if n in names]
     idx = [names.index(n) for n in shown]
@@ -93,7 +87,7 @@ def main(argv=None) -> int:
     print(f'{len(fit)} training trials ({len(pos)} contact frames), {len(test)} left out '
           f'({args.family}); features: {", ".join(shown)}')
     caught_rows = []
-    cols = [names.index(c) for c in columns]
+    cols = [names.index(c) for c in setting.columns]
     for seed in (int(s) for s in args.seeds.split(',')):
         forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=seed,
                             jobs=args.jobs)

@@ -238,6 +238,23 @@ def grid_study(*, train: Dict[str, tuple], heldout: Dict[str, tuple],
     return rows, best_rows, totals
 
 
+def lofo_setting(name: str, *, label: LabelWindow) -> tuple[FeatureSetting, bool]:
+    """
+    Return the feature setting a ``--lofo`` setting name stands for, and whether it is augmented.
+
+    ``name`` is a key of :data:`LOFO_SETTINGS`, optionally ending in
+    :data:`~contact_detector.training.augmentation.AUGMENTED`. Its configuration is the shipped
+    one with every extra feature and the fields of :data:`LOFO_CONFIG_CHANGES` changed; its
+    columns are the setting's (all of the shipped model's when the entry is None). The
+    leave-one-family-out diagnostics in ``benchmarks/`` resolve names the same way.
+    """
+    base = name.removesuffix(AUGMENTED)
+    config = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES,
+                     **LOFO_CONFIG_CHANGES.get(base, {}))
+    columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
+    return FeatureSetting(name, config, label, columns=tuple(columns)), name.endswith(AUGMENTED)
+
+
 def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
                label_start_s: float = 0.0, label_ignore_s: float = 0.0,
@@ -272,7 +289,6 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     if unknown:
         raise ConfigError(f'no trials of the families {unknown} (the folders hold '
                           f'{sorted(present)})')
-    full = replace(DEFAULT_FEATURES, extra_features=EXTRA_FEATURES)
     cache: Dict[tuple, list] = {}
 
     def frames_of(config: FeatureConfig, augmented: bool) -> list:
@@ -292,12 +308,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                     'impact events | median [ms] | p95 [ms] |',
                     '|---|---|---|---|---|---|---|---|']
     for name in progress(settings):
-        augmented = name.endswith(AUGMENTED)
-        base = name.removesuffix(AUGMENTED)
-        columns = LOFO_SETTINGS[base] or DEFAULT_FEATURES.feature_names
-        config = replace(full, **LOFO_CONFIG_CHANGES.get(base, {}))
-        window = LabelWindow(label_start_s, label_end_s, label_ignore_s)
-        setting = FeatureSetting(name, config, window, columns=tuple(columns))
+        setting, augmented = lofo_setting(
+            name, label=LabelWindow(label_start_s, label_end_s, label_ignore_s))
+        config = setting.config
         frames = frames_of(config, False)
         knocked = {}
         for f in frames:
