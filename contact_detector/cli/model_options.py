@@ -82,6 +82,10 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--label-ignore', type=float, default=DEFAULT_LABELS.ignore_s,
                         metavar='S', help='leave the frames up to S s after the label window '
                         'out of training (default %(default)s: labelled no contact)')
+    parser.add_argument('--event-weight', type=float, default=DEFAULT_LABELS.event_weight,
+                        metavar='W', help='training weight of the no-contact frames from 20 ms '
+                        'before to 0.8 s after a simulated knock, touch, brush or set-down '
+                        'starts (default %(default)s: as every other frame)')
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)

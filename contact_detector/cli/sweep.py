@@ -61,7 +61,7 @@ from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
-from contact_detector.training.protocol import check_min_samples_leaf
+from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE, NO_AUDIO_RATE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE)
@@ -152,6 +152,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo-label-ignore', type=float, default=0.0, metavar='S',
                         help='--lofo: leave the frames up to S s after the label window out '
                              'of training (default 0: they are labelled no contact)')
+    parser.add_argument('--lofo-event-weight', type=float, default=1.0, metavar='W',
+                        help='--lofo: weight of the no-contact frames from 20 ms before to '
+                             '0.8 s after a simulated knock, touch, brush or set-down starts '
+                             '(default 1: as every other frame)')
     parser.add_argument('--grid', choices=('compare', 'focus', 'full', 'none'),
                         default='compare', help='feature grid (none: only --ablation)')
     parser.add_argument('--ablation', action='store_true')
@@ -192,6 +196,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         try:
             augmentation = augmentation_from_args(args)
             check_min_samples_leaf(args.min_samples_leaf)
+            label = LabelWindow(args.lofo_label_start, args.lofo_label_end,
+                                args.lofo_label_ignore, args.lofo_event_weight)
             found, audio_rate, wrench_rate = discover(folder_bags(args.bags), args)
         except ContactDetectorError as err:
             parser.error(str(err))
@@ -203,9 +209,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         try:
             output = lofo_study(
                 trials=trials, settings=args.lofo_settings.split(','),
-                label_end_s=args.lofo_label_end, trees=args.trees, seed=args.seed,
-                label_start_s=args.lofo_label_start, label_ignore_s=args.lofo_label_ignore,
-                seeds=args.seeds or (),
+                label=label, trees=args.trees, seed=args.seed, seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
                 families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
                 jobs=args.jobs, progress=lambda items: tqdm(items, desc='lofo', unit='setting'))

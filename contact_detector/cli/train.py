@@ -116,7 +116,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     config = config_from_args(args)
     labels = LabelWindow(start_s=args.label_start, end_s=args.label_end,
-                         ignore_s=args.label_ignore)
+                         ignore_s=args.label_ignore, event_weight=args.event_weight)
     rule = rule_from_args(args)
     # An F/T-only model (--no-audio) trains on recordings without an audio topic too.
     found: dict[Path, Streams] = dict(discover_all(find_bags(args.bags), args=args, params={},

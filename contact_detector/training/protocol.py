@@ -38,6 +38,10 @@ from contact_detector.training.augmentation import augment_events, WrenchAugment
 import numpy as np
 
 SPLIT = (0.56, 0.19, 0.25)
+#: The frames :meth:`LabelWindow.weights` weighs: from 20 ms before an exogenous event's start
+#: (its sound reaches the microphone 2-4 ms after the hit) to 0.8 s after it (a brush lasts
+#: up to 0.6 s, and the spectra and recent maxima remember it a little longer), s.
+EVENT_WINDOW_S = (0.02, 0.8)
 
 
 @dataclass(frozen=True)
@@ -50,23 +54,70 @@ class LabelWindow:
     ignore_s)`` are left out of training (``ignore_s`` > 0): the object resting on the table
     after the window is then not taught as *no contact*, so a forest that misses the first
     frames of a contact is not trained to call the rest of it no contact either.
+
+    ``event_weight`` is how much a *no contact* frame near an exogenous event (a knock, a
+    touch, a brush, a set-down: the simulator's ``impacts``) weighs in training, against 1
+    for every other frame (:meth:`weights`). Those frames are a few percent of a training
+    set and the ones an early release comes from; weighting them makes the trees split on
+    what tells them from a contact.
     """
 
     start_s: float = 0.0
     end_s: float = 0.1
     ignore_s: float = 0.0
+    event_weight: float = 1.0
 
     def __post_init__(self) -> None:
-        """Refuse a negative or non-finite ``ignore_s`` (:class:`ConfigError`)."""
-        if isinstance(self.ignore_s, bool) or not isinstance(self.ignore_s, (int, float)) \
-                or not np.isfinite(self.ignore_s) or self.ignore_s < 0:
-            raise ConfigError(f'LabelWindow.ignore_s must be a finite number >= 0 s, got '
-                              f'{self.ignore_s!r}')
+        """Refuse a negative ``ignore_s`` or an ``event_weight`` below 1 (:class:`ConfigError`)."""
+        for name, low in (('ignore_s', 0.0), ('event_weight', 1.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not np.isfinite(value) or value < low:
+                raise ConfigError(f'LabelWindow.{name} must be a finite number >= {low:g}, '
+                                  f'got {value!r}')
 
     def to_dict(self) -> dict:
-        """Plain-JSON form, stored in the model bundle (``ignore_s`` only when > 0)."""
+        """Plain-JSON form, stored in the model bundle (the last two only when not default)."""
         out = {'start_s': self.start_s, 'end_s': self.end_s}
-        return {**out, 'ignore_s': self.ignore_s} if self.ignore_s > 0 else out
+        if self.ignore_s > 0:
+            out['ignore_s'] = self.ignore_s
+        if self.event_weight != 1.0:
+            out['event_weight'] = self.event_weight
+        return out
+
+    def weights(self, *, t: np.ndarray, onsets: Sequence[float],
+                exogenous: Sequence[float]) -> Optional[np.ndarray]:
+        """
+        Return each frame's training weight, or None when every frame weighs 1.
+
+        A frame ending in ``[e - EVENT_WINDOW_S[0], e + EVENT_WINDOW_S[1])`` of an event
+        start ``e``, and before the first onset, weighs ``event_weight``; every other frame 1.
+
+        Parameters
+        ----------
+        t : np.ndarray, shape (n,)
+            Frame times (last sample), s.
+        onsets : sequence of float
+            True onsets, s.
+        exogenous : sequence of float
+            Starts of the exogenous events, s (none for a recording).
+
+        Returns
+        -------
+        np.ndarray, shape (n,), float, or None
+            None when ``event_weight`` is 1 or no frame is near an event, so that the
+            forest is fitted exactly as without weights.
+
+        """
+        if self.event_weight == 1.0 or not len(exogenous):
+            return None
+        t = np.asarray(t, dtype=float)
+        near = np.zeros(t.size, dtype=bool)
+        for e in exogenous:
+            near |= (t >= e - EVENT_WINDOW_S[0]) & (t < e + EVENT_WINDOW_S[1])
+        if len(onsets):
+            near &= t < min(onsets)
+        return np.where(near, self.event_weight, 1.0) if near.any() else None
 
     def trained(self, *, t: np.ndarray, onsets: Sequence[float]) -> np.ndarray:
         """
@@ -100,13 +151,16 @@ class TrialData:
     x: np.ndarray
     y: np.ndarray
     onsets: List[float]
+    #: Training weight per frame (:meth:`LabelWindow.weights`); None = every frame 1.
+    w: Optional[np.ndarray] = None
 
 
 def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_rate: float,
                    wrench_rate: float, label_window: LabelWindow,
                    onsets: Optional[List[float]] = None, condition: str = '',
                    augmentation: Optional[WrenchAugmentation] = None,
-                   augment_seed: Sequence[int] = (0,)) -> TrialData:
+                   augment_seed: Sequence[int] = (0,),
+                   exogenous: Sequence[float] = ()) -> TrialData:
     """
     Compute the labelled feature frames of one bag.
 
@@ -130,6 +184,9 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
         Vary the wrench before the features (:mod:`.augmentation`); None = as recorded.
     augment_seed : sequence of int
         Entropy of the augmentation draw.
+    exogenous : sequence of float
+        Starts of the exogenous events, s (the simulator's manifest; none for a recording),
+        whose frames weigh ``label_window.event_weight``.
 
     Returns
     -------
@@ -152,7 +209,8 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
                      end_s=label_window.end_s)
     trained = label_window.trained(t=t, onsets=onsets)
     return TrialData(name=Path(bag).name, condition=condition, t=t[trained],
-                     x=frames.x[keep][trained], y=y[trained], onsets=list(onsets))
+                     x=frames.x[keep][trained], y=y[trained], onsets=list(onsets),
+                     w=label_window.weights(t=t[trained], onsets=onsets, exogenous=exogenous))
 
 
 def read_labels_csv(path: Path) -> Dict[str, List[float]]:
@@ -298,6 +356,7 @@ def split_indices(*, kind: str, y: np.ndarray, groups: np.ndarray,
 def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
               trial_names: Sequence[str], seed: int, jobs: int,
               n_range: Sequence[int] = range(1, 11), min_samples_leaf: int = 1,
+              sample_weight: Optional[np.ndarray] = None,
               progress: Optional[Callable[[str], None]] = None) -> SplitResult:
     """
     Run the paper's protocol on one split kind; the returned forest is refit on train + val.
@@ -320,6 +379,9 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
         Candidate ``n_estimators``.
     min_samples_leaf : int
         Of every forest (:func:`make_forest`).
+    sample_weight : np.ndarray, shape (n,), optional
+        Training weight of each frame (:meth:`LabelWindow.weights`) in every fit; None = 1.
+        The scores (AUC, accuracy, the report) count every frame once.
     progress : callable or None
         Called with a short message after each step.
 
@@ -341,9 +403,12 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
 
     check_min_samples_leaf(min_samples_leaf)
 
-    def forest_of(n):
-        return make_forest(n_estimators=n, seed=seed, jobs=jobs,
-                           min_samples_leaf=min_samples_leaf)
+    def fitted(n, idx):
+        forest = make_forest(n_estimators=n, seed=seed, jobs=jobs,
+                             min_samples_leaf=min_samples_leaf)
+        if sample_weight is None:
+            return forest.fit(x[idx], y[idx])
+        return forest.fit(x[idx], y[idx], sample_weight=sample_weight[idx])
 
     if np.unique(y).size < 2:
         raise BagError('the labelled frames contain only one class: check the truth topic or '
@@ -351,7 +416,7 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     train, val, test = split_indices(kind=kind, y=y, groups=groups, seed=seed)
     table = []
     for n in n_range:
-        forest = forest_of(n).fit(x[train], y[train])
+        forest = fitted(n, train)
         p = forest.predict_proba(x[val])[:, 1]
         auc = roc_auc_score(y[val], p) if np.unique(y[val]).size == 2 else float('nan')
         table.append({'n_estimators': n, 'accuracy': accuracy_score(y[val], p >= 0.5),
@@ -368,12 +433,12 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
                                      random_state=seed).split(x, y, groups)
     scores = []
     for fold_train, fold_test in folds:
-        forest = forest_of(best).fit(x[fold_train], y[fold_train])
+        forest = fitted(best, fold_train)
         scores.append(accuracy_score(y[fold_test], forest.predict(x[fold_test])))
     if progress:
         progress(f'{kind} split: 10-fold CV accuracy {np.mean(scores):.5f}')
     fit_idx = np.concatenate([train, val])
-    forest = forest_of(best).fit(x[fit_idx], y[fit_idx])
+    forest = fitted(best, fit_idx)
     p_test = forest.predict_proba(x[test])[:, 1]
     pred = (p_test >= 0.5).astype(int)
     names = ['not contact', 'contact']

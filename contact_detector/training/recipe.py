@@ -403,20 +403,26 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                               else None,
                               condition=manifest.get(bag, {}).get('condition', ''),
                               augmentation=augmentation,
-                              augment_seed=trial_seed(seed=seed, name=bag.name))
+                              augment_seed=trial_seed(seed=seed, name=bag.name),
+                              exogenous=[float(i['t']) for i in
+                                      manifest.get(bag, {}).get('impacts', [])])
 
     trials = Parallel(n_jobs=jobs)(
         delayed(one)(bag) for bag in progress(bags, 'features'))
     x = np.concatenate([t.x for t in trials])
     y = np.concatenate([t.y for t in trials])
     groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
+    weights = None
+    if any(t.w is not None for t in trials):
+        weights = np.concatenate([np.ones(t.y.size) if t.w is None else t.w for t in trials])
     names = _trial_names(bags=bags, user=user)
     log(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
     results = {}
     for kind in ('sample', 'trial'):
         results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
                                   seed=seed, jobs=jobs, n_range=trees,
-                                  min_samples_leaf=min_samples_leaf, progress=step)
+                                  min_samples_leaf=min_samples_leaf,
+                                  sample_weight=weights, progress=step)
     quoted = results['trial']
     metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
                       'cv_accuracy_mean': r.cv_mean, 'cv_accuracy_sd': r.cv_sd,
@@ -430,6 +436,8 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 'exogenous_events': _event_counts(manifest.get(b, {}) for b in bags),
                 'test_trials': quoted.test_trials, 'seed': seed,
                 'min_samples_leaf': min_samples_leaf,
+                # frames weighing labels.event_weight (near a simulated exogenous event)
+                'event_weighted_frames': 0 if weights is None else int((weights != 1).sum()),
                 'augmentation': augmentation.to_dict() if augmentation else None,
                 'audio_rate': sorted({s.audio_rate for s in found.values()}),
                 'wrench_rate': sorted({round(s.wrench_rate, 3) for s in found.values()}),

@@ -255,9 +255,8 @@ def lofo_setting(name: str, *, label: LabelWindow) -> tuple[FeatureSetting, bool
     return FeatureSetting(name, config, label, columns=tuple(columns)), name.endswith(AUGMENTED)
 
 
-def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s: float,
+def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: LabelWindow,
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
-               label_start_s: float = 0.0, label_ignore_s: float = 0.0,
                augmentation: WrenchAugmentation = WrenchAugmentation(),
                seeds: Sequence[int] = (), min_samples_leaf: int = 1,
                families: Optional[Sequence[str]] = None,
@@ -277,8 +276,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
     every fold trains one forest per seed and each family's row pools the outcomes of all of
     them (``n`` trials x ``len(seeds)``), so that two settings are not told apart by one
     forest's randomness; else one forest of ``seed``. Every forest has ``trees`` trees and
-    ``min_samples_leaf`` (1: fully grown, the paper's); frames up to ``label_ignore_s`` after
-    the label window are left out of their training (:class:`~.protocol.LabelWindow`).
+    ``min_samples_leaf`` (1: fully grown, the paper's) and learns ``label``: the contact
+    frames, the frames left out after them and the weight of the frames near an exogenous
+    event (:class:`~.protocol.LabelWindow`).
     ``families`` leaves only those families out in turn (every forest still trains on all the
     others; default: every family, the figure to choose by); a name no trial has raises
     ConfigError. Returns markdown.
@@ -308,8 +308,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label_end_s
                     'impact events | median [ms] | p95 [ms] |',
                     '|---|---|---|---|---|---|---|---|']
     for name in progress(settings):
-        setting, augmented = lofo_setting(
-            name, label=LabelWindow(label_start_s, label_end_s, label_ignore_s))
+        setting, augmented = lofo_setting(name, label=label)
         config = setting.config
         frames = frames_of(config, False)
         knocked = {}

@@ -193,7 +193,9 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     """
     Train the protocol's forest on the given trials (:func:`~.protocol.make_forest`).
 
-    ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1.
+    ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1. The frames
+    near a trial's exogenous events weigh ``setting.label.event_weight``
+    (:meth:`~.protocol.LabelWindow.weights`).
     """
     cols = _columns(setting)
     trained = [setting.label.trained(t=f.t, onsets=[f.truth.onset_t]) for f in frames]
@@ -201,9 +203,15 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     y = np.concatenate([frame_labels(t=f.t[keep], onsets=[f.truth.onset_t],
                                      start_s=setting.label.start_s, end_s=setting.label.end_s)
                         for f, keep in zip(frames, trained)])
+    weights = [setting.label.weights(t=f.t[keep], onsets=[f.truth.onset_t],
+                                     exogenous=[e[0] for e in f.truth.impacts])
+               for f, keep in zip(frames, trained)]
     forest = make_forest(n_estimators=n_estimators, seed=seed, jobs=jobs,
                          min_samples_leaf=min_samples_leaf)
-    return forest.fit(x, y)
+    if all(w is None for w in weights):
+        return forest.fit(x, y)
+    return forest.fit(x, y, sample_weight=np.concatenate(
+        [np.ones(int(keep.sum())) if w is None else w for w, keep in zip(weights, trained)]))
 
 
 def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:

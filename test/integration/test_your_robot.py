@@ -286,3 +286,24 @@ def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tm
     assert cards['0'].training['contact_frames'] == cards['0.2'].training['contact_frames']
     assert train_cli.main([str(bags), '--label-ignore', '-1', '--out',
                            str(tmp_path / 'bad.npz')]) == 1
+
+
+def test_train_weighs_the_frames_of_simulated_events_with_event_weight(tmp_path):
+    bags = tmp_path / 'trials'
+    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', '31', '--conditions',
+                              'exogenous', '--quiet']) == 0
+    models = {}
+    for weight in ('1', '5'):
+        model = tmp_path / f'w{weight}.npz'
+        assert train_cli.main([str(bags), '--trees', '3', '--jobs', '1', '--no-events',
+                               '--event-weight', weight, '--out', str(model)]) == 0
+        models[weight] = load_bundle(path=model)
+    assert models['1'].label_window == {'start_s': 0.0, 'end_s': 0.3}
+    assert models['5'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 5.0}
+    assert models['1'].training['event_weighted_frames'] == 0
+    # every exogenous trial has 2-4 events, each weighing about 0.8 s of 10 ms frames
+    assert 6 * 2 * 40 <= models['5'].training['event_weighted_frames'] <= 6 * 4 * 82
+    # the same frames and seed, other weights: other trees
+    assert models['1'].forest_sha256 != models['5'].forest_sha256
+    assert train_cli.main([str(bags), '--event-weight', '0.5', '--out',
+                           str(tmp_path / 'bad.npz')]) == 1

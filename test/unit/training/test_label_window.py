@@ -40,3 +40,30 @@ def test_model_files_without_ignore_s_keep_their_label_window():
 def test_a_bad_ignore_s_is_refused(bad):
     with pytest.raises(ConfigError, match='ignore_s'):
         LabelWindow(start_s=0.0, end_s=0.3, ignore_s=bad)
+
+
+def test_frames_near_an_exogenous_event_before_the_onset_weigh_event_weight():
+    t = np.arange(500) / 100.0
+    window = LabelWindow(start_s=0.0, end_s=0.3, event_weight=4.0)
+    # a knock at 1.0 s, a brush at 3.7 s that runs into the contact at 4.0 s
+    w = window.weights(t=t, onsets=[4.0], exogenous=[1.0, 3.7])
+    heavy = t[w == 4.0]
+    assert heavy.tolist() == (np.r_[98:180, 368:400] / 100.0).tolist()
+    assert set(w.tolist()) == {1.0, 4.0}
+    # the contact's own frames are never weighted, nor is anything without events
+    assert (w[t >= 4.0] == 1.0).all()
+    assert window.weights(t=t, onsets=[4.0], exogenous=[]) is None
+    assert window.weights(t=t, onsets=[0.5], exogenous=[1.0]) is None
+    assert LabelWindow(start_s=0.0, end_s=0.3).weights(t=t, onsets=[4.0], exogenous=[1.0]) is None
+
+
+def test_the_event_weight_is_in_the_model_file_only_when_it_is_not_1():
+    window = LabelWindow(start_s=0.0, end_s=0.3, event_weight=3.0)
+    assert window.to_dict() == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 3.0}
+    assert LabelWindow(**window.to_dict()) == window
+
+
+@pytest.mark.parametrize('bad', [0.5, 0.0, float('nan'), float('inf'), True])
+def test_a_bad_event_weight_is_refused(bad):
+    with pytest.raises(ConfigError, match='event_weight'):
+        LabelWindow(start_s=0.0, end_s=0.3, event_weight=bad)
