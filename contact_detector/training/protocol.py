@@ -59,7 +59,10 @@ class LabelWindow:
     touch, a brush, a set-down: the simulator's ``impacts``) weighs in training, against 1
     for every other frame (:meth:`weights`). Those frames are a few percent of a training
     set and the ones an early release comes from; weighting them makes the trees split on
-    what tells them from a contact.
+    what tells them from a contact. The weights are frequency weights: scikit-learn 1.9 and
+    later draw each tree's bootstrap sample with them as probabilities (scikit-learn
+    #31529), earlier versions multiply them into the bootstrap counts; either way a frame of
+    weight W counts, in expectation, as W frames.
     """
 
     start_s: float = 0.0

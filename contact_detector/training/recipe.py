@@ -404,8 +404,8 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                               condition=manifest.get(bag, {}).get('condition', ''),
                               augmentation=augmentation,
                               augment_seed=trial_seed(seed=seed, name=bag.name),
-                              exogenous=[float(i['t']) for i in
-                                      manifest.get(bag, {}).get('impacts', [])])
+                              exogenous=[float(i['t'])
+                                         for i in manifest.get(bag, {}).get('impacts', [])])
 
     trials = Parallel(n_jobs=jobs)(
         delayed(one)(bag) for bag in progress(bags, 'features'))
