@@ -354,6 +354,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     forests = (f'Forests: {trees} trees, min_samples_leaf {min_samples_leaf}, '
                f"seeds {', '.join(str(k) for k in (seeds or (seed,)))} (each family's row pools "
                'them).')
+    if label.event_weight != 1.0:
+        forests += (f' The frames near a simulated exogenous event weigh {label.event_weight:g} '
+                    'in training.')
     if families:
         forests += (f" Left out: only {', '.join(families)} (a screen; the worst family is "
                     'over these).')

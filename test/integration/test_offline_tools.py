@@ -781,6 +781,26 @@ def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
     assert rows and all(r[3].startswith('0/') and r[4].split()[0] == '0' for r in rows)
 
 
+def test_sweep_lofo_event_weight_changes_the_forests_and_says_so(data, tmp_path, capsys):
+    bags = str(data['bags'])
+    families = sorted({t.condition for t in data['trials'].values()})
+    tables = {}
+    for weight in ('1', '20'):
+        out = tmp_path / f'lofo{weight}.md'
+        assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '3',
+                               '--jobs', '1', '--lofo-event-weight', weight,
+                               '--out', str(out)]) == 0
+        tables[weight] = out.read_text()
+    assert 'weigh' not in tables['1'].split('|')[0]
+    assert 'The frames near a simulated exogenous event weigh 20 in training.' in tables['20']
+    # the same trials and seeds, other weights: other forests, so other rows somewhere
+    assert tables['1'].split('## Every family')[1] != tables['20'].split('## Every family')[1]
+    assert len(families) >= 2
+    with pytest.raises(SystemExit):
+        sweep_cli.main([bags, '--lofo', '--lofo-event-weight', '0.5'])
+    assert 'event_weight must be a finite number >= 1' in capsys.readouterr().err
+
+
 def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data, tmp_path,
                                                                             capsys):
     bags = str(data['bags'])
