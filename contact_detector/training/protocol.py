@@ -158,6 +158,30 @@ class TrialData:
     w: Optional[np.ndarray] = None
 
 
+def stack_weights(weights: Sequence[Optional[np.ndarray]], *,
+                  sizes: Sequence[int]) -> Optional[np.ndarray]:
+    """
+    Concatenate the trials' frame weights (:meth:`LabelWindow.weights`) for one fit.
+
+    Parameters
+    ----------
+    weights : sequence of np.ndarray or None
+        Per trial: the weight of each of its frames, or None for all 1.
+    sizes : sequence of int
+        Per trial: its frame count.
+
+    Returns
+    -------
+    np.ndarray, shape (sum(sizes),), or None
+        None when every trial's is None: the forest is then fitted without weights, as
+        scikit-learn draws its bootstrap samples otherwise (``LabelWindow``).
+
+    """
+    if all(w is None for w in weights):
+        return None
+    return np.concatenate([np.ones(n) if w is None else w for w, n in zip(weights, sizes)])
+
+
 def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_rate: float,
                    wrench_rate: float, label_window: LabelWindow,
                    onsets: Optional[List[float]] = None, condition: str = '',
@@ -409,9 +433,8 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     def fitted(n, idx):
         forest = make_forest(n_estimators=n, seed=seed, jobs=jobs,
                              min_samples_leaf=min_samples_leaf)
-        if sample_weight is None:
-            return forest.fit(x[idx], y[idx])
-        return forest.fit(x[idx], y[idx], sample_weight=sample_weight[idx])
+        return forest.fit(x[idx], y[idx], sample_weight=None if sample_weight is None
+                          else sample_weight[idx])
 
     if np.unique(y).size < 2:
         raise BagError('the labelled frames contain only one class: check the truth topic or '

@@ -43,7 +43,7 @@ from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
 from contact_detector.training.protocol import (check_min_samples_leaf, LabelWindow, run_split,
-                                                trial_features)
+                                                stack_weights, trial_features)
 import numpy as np
 
 #: Condition sets of the simulated trials ``--with-sim`` adds.
@@ -412,9 +412,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     x = np.concatenate([t.x for t in trials])
     y = np.concatenate([t.y for t in trials])
     groups = np.concatenate([np.full(t.y.size, i) for i, t in enumerate(trials)])
-    weights = None
-    if any(t.w is not None for t in trials):
-        weights = np.concatenate([np.ones(t.y.size) if t.w is None else t.w for t in trials])
+    weights = stack_weights([t.w for t in trials], sizes=[t.y.size for t in trials])
     names = _trial_names(bags=bags, user=user)
     log(f'{len(trials)} trials, {y.size} frames, {int(y.sum())} labelled contact')
     results = {}

@@ -39,7 +39,7 @@ from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.compiled_forest import CompiledForest
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import augment_events, trial_seed, WrenchAugmentation
-from contact_detector.training.protocol import LabelWindow, make_forest
+from contact_detector.training.protocol import LabelWindow, make_forest, stack_weights
 from joblib import delayed, Parallel
 import numpy as np
 from sklearn.ensemble import RandomForestClassifier
@@ -203,15 +203,13 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     y = np.concatenate([frame_labels(t=f.t[keep], onsets=[f.truth.onset_t],
                                      start_s=setting.label.start_s, end_s=setting.label.end_s)
                         for f, keep in zip(frames, trained)])
-    weights = [setting.label.weights(t=f.t[keep], onsets=[f.truth.onset_t],
-                                     exogenous=[e[0] for e in f.truth.impacts])
-               for f, keep in zip(frames, trained)]
+    weights = stack_weights([setting.label.weights(t=f.t[keep], onsets=[f.truth.onset_t],
+                                                   exogenous=[e[0] for e in f.truth.impacts])
+                             for f, keep in zip(frames, trained)],
+                            sizes=[int(keep.sum()) for keep in trained])
     forest = make_forest(n_estimators=n_estimators, seed=seed, jobs=jobs,
                          min_samples_leaf=min_samples_leaf)
-    if all(w is None for w in weights):
-        return forest.fit(x, y)
-    return forest.fit(x, y, sample_weight=np.concatenate(
-        [np.ones(int(keep.sum())) if w is None else w for w, keep in zip(weights, trained)]))
+    return forest.fit(x, y, sample_weight=weights)
 
 
 def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:

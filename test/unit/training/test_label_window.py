@@ -15,7 +15,7 @@
 """Which frames a forest is trained on: the label window and the frames left out after it."""
 
 from contact_detector.errors import ConfigError
-from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.protocol import LabelWindow, stack_weights
 import numpy as np
 import pytest
 
@@ -67,3 +67,9 @@ def test_the_event_weight_is_in_the_model_file_only_when_it_is_not_1():
 def test_a_bad_event_weight_is_refused(bad):
     with pytest.raises(ConfigError, match='event_weight'):
         LabelWindow(start_s=0.0, end_s=0.3, event_weight=bad)
+
+
+def test_trials_without_events_weigh_1_beside_trials_with_them():
+    assert stack_weights([None, None], sizes=[3, 2]) is None
+    stacked = stack_weights([None, np.array([4.0, 1.0])], sizes=[3, 2])
+    assert stacked.tolist() == [1.0, 1.0, 1.0, 4.0, 1.0]
