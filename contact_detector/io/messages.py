@@ -472,11 +472,14 @@ def _int_array(data: Any, dtype: type, what: str) -> np.ndarray:
 
 def _float_array(data: Any, what: str) -> np.ndarray:
     arr = _raw_array(data, what)
-    if arr.size and arr.dtype.kind not in 'fiu':
+    if not arr.size:
+        # an empty array of any type is no samples (numpy warns when it casts complex ones)
+        return np.zeros(arr.shape, dtype=np.float32)
+    if arr.dtype.kind not in 'fiu':
         raise InputError(f'{what} must hold numbers, got {arr.dtype.name} values')
     with np.errstate(over='ignore'):       # too large for float32 -> Inf, refused below
         out = arr.astype(np.float32, copy=False)
-    if out.size and not np.all(np.isfinite(out)):
+    if not np.all(np.isfinite(out)):
         raise InputError(f'{what} contains NaN or Inf')
     return out
 
