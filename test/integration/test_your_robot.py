@@ -268,16 +268,24 @@ def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys):
     assert scored['trials'] == len(test_trials)
 
 
-def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tmp_path):
+def _models_per_value(*, tmp_path, seed: str, conditions: str, trees: str, option: str,
+                      values: tuple) -> tuple:
+    """Simulate 6 trials, train one model per value of a train option; (bags, value -> bundle)."""
     bags = tmp_path / 'trials'
-    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', '30', '--conditions',
-                              'paper', '--quiet']) == 0
-    cards = {}
-    for ignore in ('0', '0.2'):
-        model = tmp_path / f'ignore{ignore}.npz'
-        assert train_cli.main([str(bags), '--trees', '2', '--jobs', '1', '--no-events',
-                               '--label-ignore', ignore, '--out', str(model)]) == 0
-        cards[ignore] = load_bundle(path=model)
+    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', seed, '--conditions',
+                              conditions, '--quiet']) == 0
+    models = {}
+    for value in values:
+        model = tmp_path / f'{option.strip("-")}{value}.npz'
+        assert train_cli.main([str(bags), '--trees', trees, '--jobs', '1', '--no-events',
+                               option, value, '--out', str(model)]) == 0
+        models[value] = load_bundle(path=model)
+    return bags, models
+
+
+def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tmp_path):
+    bags, cards = _models_per_value(tmp_path=tmp_path, seed='30', conditions='paper',
+                                    trees='2', option='--label-ignore', values=('0', '0.2'))
     assert cards['0'].label_window == {'start_s': 0.0, 'end_s': 0.3}
     assert cards['0.2'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'ignore_s': 0.2}
     # 0.2 s of 10 ms audio frames, 0.3-0.5 s after each of the 6 onsets, are not trained on
@@ -289,15 +297,8 @@ def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tm
 
 
 def test_train_weighs_the_frames_of_simulated_events_with_event_weight(tmp_path):
-    bags = tmp_path / 'trials'
-    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', '31', '--conditions',
-                              'exogenous', '--quiet']) == 0
-    models = {}
-    for weight in ('1', '5'):
-        model = tmp_path / f'w{weight}.npz'
-        assert train_cli.main([str(bags), '--trees', '3', '--jobs', '1', '--no-events',
-                               '--event-weight', weight, '--out', str(model)]) == 0
-        models[weight] = load_bundle(path=model)
+    bags, models = _models_per_value(tmp_path=tmp_path, seed='31', conditions='exogenous',
+                                     trees='3', option='--event-weight', values=('1', '5'))
     assert models['1'].label_window == {'start_s': 0.0, 'end_s': 0.3}
     assert models['5'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 5.0}
     assert models['1'].training['event_weighted_frames'] == 0
