@@ -7,8 +7,11 @@
 # 15-frame mean >= 0.4) and augmented training wrenches, in every family: a tared sensor on a
 # quarter of the trials (--augment-tare 0.25, docs/decisions/2026-11-24-tared-sensors-
 # everywhere.md) and lever arms x0.5-2 (--augment-torque 0.5,2,
-# docs/decisions/2026-11-24-lever-arm-augmentation.md). Usage:
-# tools/build_model.sh [TRAIN_DIR [EXTRA_DIR]] (default data/train, data/train_extra). Writes
+# docs/decisions/2026-11-24-lever-arm-augmentation.md), with the no-contact frames from 20 ms
+# before to 0.8 s after the start of a simulated knock, touch, brush or set-down weighing 3
+# in training (--event-weight 3, docs/decisions/2026-11-25-weight-exogenous-event-frames.md).
+# Usage: tools/build_model.sh [TRAIN_DIR [EXTRA_DIR]] (default data/train, data/train_extra).
+# Writes
 # models/contact_forest.npz (loads with numpy alone), its card and report.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -21,4 +24,5 @@ extra="${2:-$root/data/train_extra}"
 .venv/bin/contact-detector simulate "$extra" --trials 120 --seed 12 --conditions wide \
   --events everywhere --hits mixed --overwrite --quiet
 .venv/bin/contact-detector train "$data" "$extra" --out models/contact_forest.npz \
-  --report models/report --jobs 2 --seed 0 --augment --augment-tare 0.25 --augment-torque 0.5,2
+  --report models/report --jobs 2 --seed 0 --augment --augment-tare 0.25 --augment-torque 0.5,2 \
+  --event-weight 3
