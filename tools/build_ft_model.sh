@@ -17,8 +17,10 @@
 # when the mean P(contact) of the last 15 frames reaches 0.4 (the rule with the fewest
 # premature releases in the worst left-out family, exogenous); the training wrenches
 # augmented (a tared sensor on half the trials, lever arms x1/3-x3: sweep --lofo's
-# ft-only+signed+carried+aug, docs/decisions/2026-11-24-ft-only-augmentation.md). Arm the
-# node while the hand holds the object still (docs/node.md).
+# ft-only+signed+carried+aug, docs/decisions/2026-11-24-ft-only-augmentation.md); every frame
+# weighs the same (--event-weight 1: the multimodal model's weight 3 on the frames near a
+# simulated event released early more often left out, docs/decisions/2026-11-25-ft-only-
+# event-weight-screen.md). Arm the node while the hand holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
 set -euo pipefail
@@ -46,4 +48,5 @@ fi
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
   --augment --augment-tare 0.5 --augment-torque 0.333,3 \
+  --event-weight 1 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

@@ -85,7 +85,8 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--event-weight', type=float, default=DEFAULT_LABELS.event_weight,
                         metavar='W', help='training weight of the no-contact frames from 20 ms '
                         'before to 0.8 s after a simulated knock, touch, brush or set-down '
-                        'starts (default %(default)s: as every other frame)')
+                        'starts (default %(default)s, the shipped multimodal model\'s; 1: as every '
+                        'other frame)')
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)

@@ -53,10 +53,12 @@ MIN_RECORDINGS = 3
 
 #: The feature configuration, labels and rule of the shipped model, chosen by
 #: leave-one-family-out (docs/generalisation.md): see :meth:`FeatureConfig.shipped`. Labels
-#: cover the first 0.3 s of the contact; release at the first frame where every tree says
-#: contact (p >= 0.95 with 10 trees; 0.9 was as safe on every left-out simulator family but
-#: released early 3 times in 48 on the real_sounds family kept out of the choice), or when the
-#: mean P(contact) of the last 15 frames reaches 0.3.
+#: cover the first 0.3 s of the contact, and the no-contact frames near a simulated knock,
+#: touch, brush or set-down weigh 3 (fewer early releases left out and on fresh trials:
+#: docs/decisions/2026-11-25-weight-exogenous-event-frames.md); release at the first frame
+#: where every tree says contact (p >= 0.95 with 10 trees; 0.9 was as safe on every left-out
+#: simulator family but released early 3 times in 48 on the real_sounds family kept out of the
+#: choice), or when the mean P(contact) of the last 15 frames reaches 0.4.
 DEFAULT_FEATURES = FeatureConfig.shipped()
 #: The extra features of an F/T-only model (``--no-audio``): the vector shift features, which
 #: do not depend on the sensor's orientation, tare or sign convention, and the signed changes
@@ -68,7 +70,7 @@ DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES + ('force_change', 'torque_change', 'forc
                                           'torque_change_max') + CARRIED_FEATURES
 #: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
 NO_AUDIO_RATE = 16000
-DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3)
+DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3, event_weight=3.0)
 #: The shipped rule. The slow path at 0.4 rather than 0.3: left out, fewer early releases after
 #: a brush or a touch in the worst family, and on fresh trials half the early releases, for
 #: 0-9 ms of median latency (docs/decisions/2026-11-24-lever-arm-augmentation.md).

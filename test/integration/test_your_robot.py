@@ -286,8 +286,10 @@ def _models_per_value(*, tmp_path, seed: str, conditions: str, trees: str, optio
 def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tmp_path):
     bags, cards = _models_per_value(tmp_path=tmp_path, seed='30', conditions='paper',
                                     trees='2', option='--label-ignore', values=('0', '0.2'))
-    assert cards['0'].label_window == {'start_s': 0.0, 'end_s': 0.3}
-    assert cards['0.2'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'ignore_s': 0.2}
+    # train's default event weight is the shipped model's (3), recorded in the card
+    assert cards['0'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 3.0}
+    assert cards['0.2'].label_window == {'start_s': 0.0, 'end_s': 0.3, 'ignore_s': 0.2,
+                                         'event_weight': 3.0}
     # 0.2 s of 10 ms audio frames, 0.3-0.5 s after each of the 6 onsets, are not trained on
     dropped = cards['0'].training['frames'] - cards['0.2'].training['frames']
     assert 6 * 19 <= dropped <= 6 * 21

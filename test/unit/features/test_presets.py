@@ -19,7 +19,9 @@ from contact_detector.model.shipped import default_ft_model_path, default_model_
 from contact_detector.model.storage import load_bundle
 from contact_detector.ros.model_search import node_model_dirs
 from contact_detector.training.augmentation import WrenchAugmentation
-from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA,
+                                              DEFAULT_LABELS)
 from contact_detector.training.studies import LOFO_SETTINGS
 
 
@@ -52,6 +54,19 @@ def test_shipped_ft_model_has_the_columns_it_was_chosen_with_and_trains_defaults
     assert set(config.feature_names) == set(LOFO_SETTINGS['ft-only+signed+carried'])
     assert config.extra_features == DEFAULT_FT_ONLY_EXTRA
     assert set(CARRIED_FEATURES) <= set(config.feature_names)
+
+
+def test_shipped_models_weigh_the_frames_near_simulated_events_as_chosen() -> None:
+    # docs/decisions/2026-11-25-weight-exogenous-event-frames.md: the multimodal model's
+    # no-contact frames near a simulated knock, touch, brush or set-down weigh 3, train's
+    # default; the F/T-only model's weigh 1 (docs/decisions/2026-11-25-ft-only-event-weight-
+    # screen.md: 3 released early more often left out)
+    multimodal = load_bundle(path=default_model_path())
+    assert LabelWindow(**multimodal.label_window) == DEFAULT_LABELS
+    assert DEFAULT_LABELS.event_weight == 3.0
+    assert multimodal.training['event_weighted_frames'] > 0
+    ft_only = load_bundle(path=default_ft_model_path())
+    assert LabelWindow(**ft_only.label_window).event_weight == 1.0
 
 
 def test_shipped_models_trained_on_the_augmented_wrenches_they_were_chosen_with() -> None:
