@@ -11,8 +11,7 @@
 # before to 0.8 s after the start of a simulated knock, touch, brush or set-down weighing 3
 # in training (--event-weight 3, docs/decisions/2026-11-25-weight-exogenous-event-frames.md).
 # Usage: tools/build_model.sh [TRAIN_DIR [EXTRA_DIR]] (default data/train, data/train_extra).
-# Writes
-# models/contact_forest.npz (loads with numpy alone), its card and report.
+# Writes models/contact_forest.npz (loads with numpy alone), its card and report.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
