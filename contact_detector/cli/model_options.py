@@ -19,12 +19,17 @@ Their defaults are the shipped recipe's (:mod:`contact_detector.training.recipe`
 """
 
 import argparse
+from typing import Optional, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
-from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_EXTRA,
+from contact_detector.training.protocol import LabelWindow
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_AUGMENTATION,
+                                              DEFAULT_FT_ONLY_EXTRA, DEFAULT_FT_ONLY_LABELS,
                                               DEFAULT_LABELS, DEFAULT_RULE)
+
+_T = TypeVar('_T')
 
 
 def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
@@ -75,18 +80,21 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--no-audio', action='store_true',
                         help='an F/T-only model (robots without a microphone): no audio '
                              'column, one frame per F/T feature frame')
-    parser.add_argument('--label-start', type=float, default=DEFAULT_LABELS.start_s,
-                        help='label window start after the onset, s')
-    parser.add_argument('--label-end', type=float, default=DEFAULT_LABELS.end_s,
-                        help='label window end after the onset, s')
+    m, f = DEFAULT_LABELS, DEFAULT_FT_ONLY_LABELS
+    parser.add_argument('--label-start', type=float, default=None,
+                        help=f'label window start after the onset, s (default {m.start_s:g}; '
+                             f'with --no-audio {f.start_s:g})')
+    parser.add_argument('--label-end', type=float, default=None,
+                        help=f'label window end after the onset, s (default {m.end_s:g}; '
+                             f'with --no-audio {f.end_s:g})')
     parser.add_argument('--label-ignore', type=float, default=DEFAULT_LABELS.ignore_s,
                         metavar='S', help='leave the frames up to S s after the label window '
                         'out of training (default %(default)s: labelled no contact)')
-    parser.add_argument('--event-weight', type=float, default=DEFAULT_LABELS.event_weight,
-                        metavar='W', help='training weight of the no-contact frames from 20 ms '
-                        'before to 0.8 s after a simulated knock, touch, brush or set-down '
-                        'starts (default %(default)s, the shipped multimodal model\'s; 1: as every '
-                        'other frame)')
+    parser.add_argument('--event-weight', type=float, default=None, metavar='W',
+                        help='training weight of the no-contact frames from 20 ms before to '
+                             '0.8 s after a simulated knock, touch, brush or set-down starts '
+                             f'(default {m.event_weight:g}; with --no-audio '
+                             f'{f.event_weight:g}: as every other frame)')
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)
@@ -149,20 +157,47 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
                          extra_features=extra)
 
 
+def labels_from_args(args: argparse.Namespace) -> LabelWindow:
+    """
+    Return the label window the options name (raises ConfigError on a bad window).
+
+    An option not given takes the shipped recipe's value: the F/T-only model's with
+    ``--no-audio`` (:data:`DEFAULT_FT_ONLY_LABELS`), else the multimodal model's
+    (:data:`DEFAULT_LABELS`).
+    """
+    d = DEFAULT_FT_ONLY_LABELS if getattr(args, 'no_audio', False) else DEFAULT_LABELS
+    return LabelWindow(start_s=_given(args.label_start, default=d.start_s),
+                       end_s=_given(args.label_end, default=d.end_s),
+                       ignore_s=args.label_ignore,
+                       event_weight=_given(args.event_weight, default=d.event_weight))
+
+
 def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the wrench-augmentation ranges shared by train and sweep."""
-    parser.add_argument('--augment-tare', type=float,
-                        default=WrenchAugmentation.tare_probability,
-                        help='augmentation: probability of a tared sensor (default '
-                             f'{WrenchAugmentation.tare_probability})')
-    parser.add_argument('--augment-torque', type=scale_range,
-                        default=WrenchAugmentation.torque_scale,
-                        help='augmentation: torque scale range LOW,HIGH, log-uniform '
-                             f'(default {WrenchAugmentation.torque_scale[0]:g},'
-                             f'{WrenchAugmentation.torque_scale[1]:g})')
+    m, f = WrenchAugmentation(), DEFAULT_FT_ONLY_AUGMENTATION
+    parser.add_argument('--augment-tare', type=float, default=None,
+                        help=f'augmentation: probability of a tared sensor (default '
+                             f'{m.tare_probability:g}; train --no-audio {f.tare_probability:g})')
+    parser.add_argument('--augment-torque', type=scale_range, default=None,
+                        help='augmentation: torque scale range LOW,HIGH, log-uniform (default '
+                             f'{m.torque_scale[0]:g},{m.torque_scale[1]:g}; train --no-audio '
+                             f'{f.torque_scale[0]:g},{f.torque_scale[1]:g})')
 
 
 def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
-    """Return the augmentation the options name (raises ConfigError on a bad range)."""
-    return WrenchAugmentation(tare_probability=args.augment_tare,
-                              torque_scale=tuple(args.augment_torque))
+    """
+    Return the augmentation the options name (raises ConfigError on a bad range).
+
+    A range not given takes the shipped recipe's: the F/T-only model's with ``--no-audio``
+    (:data:`DEFAULT_FT_ONLY_AUGMENTATION`), else the multimodal model's.
+    """
+    d = (DEFAULT_FT_ONLY_AUGMENTATION if getattr(args, 'no_audio', False)
+         else WrenchAugmentation())
+    return WrenchAugmentation(
+        tare_probability=_given(args.augment_tare, default=d.tare_probability),
+        torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)))
+
+
+def _given(value: Optional[_T], *, default: _T) -> _T:
+    # argparse leaves an option that was not given at None
+    return default if value is None else value

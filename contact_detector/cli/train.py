@@ -43,13 +43,14 @@ from typing import Optional, Sequence
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.cli.model_options import (add_augmentation_arguments,
                                                 add_feature_arguments, augmentation_from_args,
-                                                config_from_args, rule_from_args, tree_counts)
+                                                config_from_args, labels_from_args,
+                                                rule_from_args, tree_counts)
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import LabelWindow, read_labels_csv, unlabelled_bags
+from contact_detector.training.protocol import read_labels_csv, unlabelled_bags
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
                                               simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
@@ -115,8 +116,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     config = config_from_args(args)
-    labels = LabelWindow(start_s=args.label_start, end_s=args.label_end,
-                         ignore_s=args.label_ignore, event_weight=args.event_weight)
+    labels = labels_from_args(args)
     rule = rule_from_args(args)
     # An F/T-only model (--no-audio) trains on recordings without an audio topic too.
     found: dict[Path, Streams] = dict(discover_all(find_bags(args.bags), args=args, params={},

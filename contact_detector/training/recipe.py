@@ -71,6 +71,16 @@ DEFAULT_FT_ONLY_EXTRA = SHIFT_FEATURES + ('force_change', 'torque_change', 'forc
 #: Audio rate assumed for recordings without an audio topic (an F/T-only model reads none), Hz.
 NO_AUDIO_RATE = 16000
 DEFAULT_LABELS = LabelWindow(start_s=0.0, end_s=0.3, event_weight=3.0)
+#: The shipped F/T-only model's labels, ``train --no-audio``'s default: contact from 30 ms after
+#: the onset (for F/T alone the first instants of a touch look like a knock on the hand), every
+#: frame weighing the same (weight 3 near simulated events released early more often left out:
+#: docs/decisions/2026-11-25-ft-only-event-weight-screen.md).
+DEFAULT_FT_ONLY_LABELS = LabelWindow(start_s=0.03, end_s=0.3)
+#: The shipped F/T-only model's wrench augmentation, ``train --no-audio --augment``'s default: a
+#: tared sensor on half the trials, lever arms x1/3-3
+#: (docs/decisions/2026-11-24-ft-only-augmentation.md). The multimodal model's is
+#: :class:`WrenchAugmentation`'s default.
+DEFAULT_FT_ONLY_AUGMENTATION = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
 #: The shipped rule. The slow path at 0.4 rather than 0.3: left out, fewer early releases after
 #: a brush or a touch in the worst family, and on fresh trials half the early releases, for
 #: 0-9 ms of median latency (docs/decisions/2026-11-24-lever-arm-augmentation.md).

@@ -109,15 +109,31 @@ def test_evaluate_shows_the_ft_model_beside_the_others(no_audio, tmp_path, capsy
 def test_train_no_audio_writes_an_ft_only_model(no_audio, tmp_path, capsys):
     model = tmp_path / 'ft.npz'
     assert cli_main.main(['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1',
-                          '--trees', '2', '--out', str(model)]) == 0
+                          '--trees', '2', '--augment', '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
+    shipped = load_bundle(path=default_ft_model_path())
     assert bundle.feature_config.ft_only and 'audio_power' not in bundle.feature_names
-    assert bundle.feature_config.extra_features == load_bundle(
-        path=default_ft_model_path()).feature_config.extra_features
+    assert bundle.feature_config.extra_features == shipped.feature_config.extra_features
+    # --no-audio's defaults are the shipped F/T-only recipe's: labels from 30 ms after the
+    # onset, every frame weighing the same, a tare on half the trials, lever arms x1/3-3
+    assert bundle.label_window == shipped.label_window == {'start_s': 0.03, 'end_s': 0.3}
+    assert bundle.training['augmentation'] == shipped.training['augmentation']
     out = tmp_path / 'd.jsonl'
     assert cli_main.main(['detect', str(no_audio / 'trial_0002'), '--model', str(model),
                           '--out', str(out)]) == 0
     assert 'ft.npz' in capsys.readouterr().out
+
+
+def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path):
+    model = tmp_path / 'ft.npz'
+    assert cli_main.main(['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1',
+                          '--trees', '1', '--augment', '--label-start', '0',
+                          '--event-weight', '2', '--augment-tare', '0.1',
+                          '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    assert bundle.label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 2.0}
+    assert bundle.training['augmentation']['tare_probability'] == 0.1
+    assert bundle.training['augmentation']['torque_scale'] == [0.333, 3.0]
 
 
 def test_train_no_audio_refuses_audio_features(no_audio, tmp_path, capsys):
