@@ -18,7 +18,7 @@ Which trials a left-out family loses, by one of the simulator's parameters.
     .venv/bin/python benchmarks/lofo_by_param.py DIR... --family geometry --param tared
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1] [--trials]
         [--setting shipped+aug --augment-tare P --augment-torque LOW,HIGH
-         [--augment-cache aug.pkl]]
+         [--augment-cache aug.pkl]] [--event-weight W]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -29,8 +29,10 @@ early and not caught, over the forests of ``--seeds``. ``--trials`` also prints 
 ``--cache`` keeps the computed frames for the next run on the same folders. A setting named
 ``NAME+aug`` trains the forests on the other families' wrenches augmented by ``--augment-tare``
 and ``--augment-torque``, as ``sweep --lofo --lofo-settings NAME+aug`` does (the shipped
-protocol: ``--setting shipped+aug --augment-tare 0.25 --augment-torque 0.5,2``); the left-out
-family is never augmented. ``--augment-cache`` keeps those frames.
+protocol: ``--setting shipped+aug --augment-tare 0.25 --augment-torque 0.5,2 --event-weight
+3``); the left-out family is never augmented. ``--augment-cache`` keeps those frames.
+``--event-weight W`` weighs the training frames near a simulated event as ``sweep
+--lofo-event-weight W`` does (default 1).
 """
 
 import argparse
@@ -91,11 +93,13 @@ def main(argv=None) -> int:
     parser.add_argument('--augment-torque', default=','.join(
         f'{v:g}' for v in WrenchAugmentation.torque_scale))
     parser.add_argument('--augment-cache', type=Path, default=None)
+    parser.add_argument('--event-weight', type=float, default=1.0)
     args = parser.parse_args(argv)
     augmentation = WrenchAugmentation(
         tare_probability=args.augment_tare,
         torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
-    setting, augmented = lofo_setting(args.setting, label=LabelWindow(0.0, 0.3))
+    setting, augmented = lofo_setting(args.setting, label=LabelWindow(
+        0.0, 0.3, event_weight=args.event_weight))
     config = setting.config
     frames = load_frames(folders=args.folders, config=config, cache=args.cache, jobs=args.jobs)
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
@@ -127,8 +131,9 @@ def main(argv=None) -> int:
     aug = ''
     if augmented:
         aug = f', augmented ({augmentation.to_dict()})'
-    print(f'{len(fit)} training trials{aug}, {len(test)} left out ({args.family}), setting '
-          f'{args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
+    weight = '' if args.event_weight == 1 else f', event weight {args.event_weight:g}'
+    print(f'{len(fit)} training trials{aug}{weight}, {len(test)} left out ({args.family}), '
+          f'setting {args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')
     print('|---|---|---|---|---|')
     for label in sorted(set(labels)):
