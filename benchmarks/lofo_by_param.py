@@ -42,11 +42,8 @@ import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
-from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
-from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.studies import lofo_setting, LOFO_SETTINGS
 from contact_detector.training.sweep import fit_forest
-from lofo_frames import add_rule_argument, load_frames, rule_from
+from lofo_frames import add_protocol_arguments, add_rule_argument, protocol_frames, rule_from
 import numpy as np
 
 WARMUP_S = 0.5
@@ -79,36 +76,18 @@ def main(argv=None) -> int:
     parser.add_argument('folders', nargs='+', type=Path)
     parser.add_argument('--family', default='geometry')
     parser.add_argument('--param', default='tared')
-    parser.add_argument('--setting', default='shipped',
-                        choices=sorted([*LOFO_SETTINGS, *(s + AUGMENTED for s in LOFO_SETTINGS)]))
     parser.add_argument('--seeds', default='0,1,2')
     parser.add_argument('--cache', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=1)
     add_rule_argument(parser)
     parser.add_argument('--trials', action='store_true')
-    # the options of train and sweep (cli/model_options.py, which a benchmark does not import),
-    # with WrenchAugmentation's defaults and its validation
-    parser.add_argument('--augment-tare', type=float,
-                        default=WrenchAugmentation.tare_probability)
-    parser.add_argument('--augment-torque', default=','.join(
-        f'{v:g}' for v in WrenchAugmentation.torque_scale))
-    parser.add_argument('--augment-cache', type=Path, default=None)
-    parser.add_argument('--event-weight', type=float, default=1.0)
+    add_protocol_arguments(parser)
     args = parser.parse_args(argv)
-    augmentation = WrenchAugmentation(
-        tare_probability=args.augment_tare,
-        torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
-    setting, augmented = lofo_setting(args.setting, label=LabelWindow(
-        0.0, 0.3, event_weight=args.event_weight))
+    setting, frames, fit_frames, protocol = protocol_frames(args)
     config = setting.config
-    frames = load_frames(folders=args.folders, config=config, cache=args.cache, jobs=args.jobs)
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
                  for f in args.folders]
     cols = [config.feature_names.index(c) for c in setting.columns]
-    fit_frames = frames
-    if augmented:
-        fit_frames = load_frames(folders=args.folders, config=config, cache=args.augment_cache,
-                                 jobs=args.jobs, augmentation=augmentation)
     fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
     test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
     results = {k: [] for k in test}
@@ -128,11 +107,7 @@ def main(argv=None) -> int:
         tag, name = key.split('/', 1)
         values.append(param_of(manifests[int(tag)].get(name, {}), args.param))
     labels = groups(values)
-    aug = ''
-    if augmented:
-        aug = f', augmented ({augmentation.to_dict()})'
-    weight = '' if args.event_weight == 1 else f', event weight {args.event_weight:g}'
-    print(f'{len(fit)} training trials{aug}{weight}, {len(test)} left out ({args.family}), '
+    print(f'{len(fit)} training trials{protocol}, {len(test)} left out ({args.family}), '
           f'setting {args.setting}, forests of seeds {args.seeds}; by {args.param}:\n')
     print(f'| {args.param} | trials | caught | early | not caught |')
     print('|---|---|---|---|---|')

@@ -17,6 +17,8 @@ Why a left-out family releases early: the events, P(contact) and features before
 
     .venv/bin/python benchmarks/lofo_early.py DIR... --family exogenous
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1]
+        [--setting shipped+aug --augment-tare P --augment-torque LOW,HIGH
+         [--augment-cache aug.pkl]] [--event-weight W]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -32,7 +34,10 @@ onset (an early release):
 
 Then the same feature values for the caught trials at their release frame, as a reference.
 ``--cache`` keeps the computed frames (a pickle, with their feature configuration: a cache
-written with another one is recomputed) for the next run on the same folders.
+written with another one is recomputed) for the next run on the same folders. The protocol
+options are ``lofo_by_param.py``'s (the shipped protocol: ``--setting shipped+aug
+--augment-tare 0.25 --augment-torque 0.5,2 --event-weight 3``); the percentiles are among the
+frames the forests trained on (augmented, for ``NAME+aug``).
 """
 
 import argparse
@@ -41,10 +46,8 @@ import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import frame_labels
-from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.studies import lofo_setting, LOFO_SETTINGS
 from contact_detector.training.sweep import fit_forest
-from lofo_frames import add_rule_argument, load_frames, rule_from
+from lofo_frames import add_protocol_arguments, add_rule_argument, protocol_frames, rule_from
 import numpy as np
 
 WARMUP_S = 0.5
@@ -65,27 +68,25 @@ def main(argv=None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('folders', nargs='+', type=Path)
     parser.add_argument('--family', default='exogenous')
-    parser.add_argument('--setting', default='shipped', choices=sorted(LOFO_SETTINGS))
     parser.add_argument('--seeds', default='0,1,2')
     parser.add_argument('--cache', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=1)
     add_rule_argument(parser)
+    add_protocol_arguments(parser)
     args = parser.parse_args(argv)
-    setting, _ = lofo_setting(args.setting, label=LabelWindow(0.0, 0.3))
+    setting, frames, fit_frames, protocol = protocol_frames(args)
     config = setting.config
-    frames = list(load_frames(folders=args.folders, config=config, cache=args.cache,
-                              jobs=args.jobs).values())
     names = config.feature_names
     shown = [n for n in SHOWN if n in names]
     idx = [names.index(n) for n in shown]
-    fit = [f for f in frames if f.truth.condition != args.family]
-    test = [f for f in frames if f.truth.condition == args.family]
+    fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
+    test = [f for f in frames.values() if f.truth.condition == args.family]
     x_fit = np.concatenate([f.x for f in fit])
     y_fit = np.concatenate([frame_labels(t=f.t, onsets=[f.truth.onset_t], start_s=0.0,
                                          end_s=0.3) for f in fit])
     pos, neg = x_fit[y_fit == 1], x_fit[y_fit == 0]
-    print(f'{len(fit)} training trials ({len(pos)} contact frames), {len(test)} left out '
-          f'({args.family}); features: {", ".join(shown)}')
+    print(f'{len(fit)} training trials{protocol} ({len(pos)} contact frames), {len(test)} '
+          f'left out ({args.family}); features: {", ".join(shown)}')
     caught_rows = []
     cols = [names.index(c) for c in setting.columns]
     for seed in (int(s) for s in args.seeds.split(',')):

@@ -17,21 +17,25 @@ The frames of the leave-one-family-out scripts (``lofo_early.py``, ``lofo_by_par
 
 Not a benchmark: imported by those two scripts, which run from this folder. Also their rule:
 the shipped one, with ``--sustain-threshold`` to score the slow path a figure was measured with
-(0.3 before the lever-arm augmentation, docs/decisions/2026-11-24-lever-arm-augmentation.md).
+(0.3 before the lever-arm augmentation, docs/decisions/2026-11-24-lever-arm-augmentation.md),
+and their training protocol: a ``sweep --lofo`` setting, augmented (``NAME+aug``) and with
+the frames near simulated events weighted as ``sweep --lofo`` does with the same options.
 """
 
 import argparse
 from dataclasses import replace
 from pathlib import Path
 import pickle
-from typing import Dict, Optional, Sequence
+from typing import Dict, Optional, Sequence, Tuple
 
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule
-from contact_detector.training.augmentation import WrenchAugmentation
+from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
+from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE
+from contact_detector.training.studies import FeatureSetting, lofo_setting, LOFO_SETTINGS
 from contact_detector.training.sweep import compute_frames, decode_bags
 
 
@@ -42,6 +46,55 @@ def add_rule_argument(parser: argparse.ArgumentParser) -> None:
                         help='slow-path threshold of the scored rule (default: the shipped '
                              f'{DEFAULT_RULE.sustain_threshold:g}; 0.3 before the lever-arm '
                              'augmentation)')
+
+
+def add_protocol_arguments(parser: argparse.ArgumentParser) -> None:
+    """
+    Add the training protocol's options, as ``sweep --lofo`` names them.
+
+    ``--setting`` (a ``sweep --lofo`` setting, ``NAME+aug`` for augmented training wrenches),
+    ``--augment-tare``, ``--augment-torque`` and ``--augment-cache`` (the augmented frames'
+    cache), ``--event-weight``; the options of train and sweep (cli/model_options.py, which a
+    benchmark does not import), with WrenchAugmentation's defaults and its validation.
+    """
+    parser.add_argument('--setting', default='shipped',
+                        choices=sorted([*LOFO_SETTINGS, *(s + AUGMENTED for s in LOFO_SETTINGS)]))
+    parser.add_argument('--augment-tare', type=float,
+                        default=WrenchAugmentation.tare_probability)
+    parser.add_argument('--augment-torque', default=','.join(
+        f'{v:g}' for v in WrenchAugmentation.torque_scale))
+    parser.add_argument('--augment-cache', type=Path, default=None)
+    parser.add_argument('--event-weight', type=float, default=1.0,
+                        help='weight of the training frames near a simulated event (sweep '
+                             '--lofo-event-weight; the shipped protocol: 3)')
+
+
+def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str, object],
+                                                       Dict[str, object], str]:
+    """
+    Return the setting, every trial's frames, the training frames and a description.
+
+    The training frames are the augmented ones for a ``NAME+aug`` setting (the left-out family
+    is scored on the plain ones, as ``sweep --lofo`` does), else the plain ones. The setting's
+    label window is 0-0.3 s after the onset with ``--event-weight``.
+    """
+    setting, augmented = lofo_setting(args.setting, label=LabelWindow(
+        0.0, 0.3, event_weight=args.event_weight))
+    frames = load_frames(folders=args.folders, config=setting.config, cache=args.cache,
+                         jobs=args.jobs)
+    text = ''
+    fit_frames = frames
+    if augmented:
+        augmentation = WrenchAugmentation(
+            tare_probability=args.augment_tare,
+            torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
+        fit_frames = load_frames(folders=args.folders, config=setting.config,
+                                 cache=args.augment_cache, jobs=args.jobs,
+                                 augmentation=augmentation)
+        text += f', augmented ({augmentation.to_dict()})'
+    if args.event_weight != 1:
+        text += f', event weight {args.event_weight:g}'
+    return setting, frames, fit_frames, text
 
 
 def rule_from(args: argparse.Namespace) -> DecisionRule:
