@@ -25,9 +25,8 @@ from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_AUGMENTATION,
-                                              DEFAULT_FT_ONLY_EXTRA, DEFAULT_FT_ONLY_LABELS,
-                                              DEFAULT_LABELS, DEFAULT_RULE)
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_RULE, recipe_defaults,
+                                              RecipeDefaults)
 
 _T = TypeVar('_T')
 
@@ -72,29 +71,30 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                             help=f'smallest carried load in {unit} that *_shift_rel divides '
                                  f'by and *_carried_cos takes a direction from (default '
                                  f'{default})')
+    # the defaults of a multimodal model, and of an F/T-only one (--no-audio)
+    m, f = recipe_defaults(ft_only=False), recipe_defaults(ft_only=True)
     parser.add_argument('--extra-features', default=None,
                         help='comma-separated extra features, from '
                              f"{', '.join(EXTRA_FEATURES)} (default "
-                             f"{','.join(d.extra_features)}; with --no-audio "
-                             f"{','.join(DEFAULT_FT_ONLY_EXTRA)})")
+                             f"{','.join(m.extra_features)}; with --no-audio "
+                             f"{','.join(f.extra_features)})")
     parser.add_argument('--no-audio', action='store_true',
                         help='an F/T-only model (robots without a microphone): no audio '
                              'column, one frame per F/T feature frame')
-    m, f = DEFAULT_LABELS, DEFAULT_FT_ONLY_LABELS
     parser.add_argument('--label-start', type=float, default=None,
-                        help=f'label window start after the onset, s (default {m.start_s:g}; '
-                             f'with --no-audio {f.start_s:g})')
+                        help='label window start after the onset, s (default '
+                             f'{m.labels.start_s:g}; with --no-audio {f.labels.start_s:g})')
     parser.add_argument('--label-end', type=float, default=None,
-                        help=f'label window end after the onset, s (default {m.end_s:g}; '
-                             f'with --no-audio {f.end_s:g})')
-    parser.add_argument('--label-ignore', type=float, default=DEFAULT_LABELS.ignore_s,
+                        help=f'label window end after the onset, s (default {m.labels.end_s:g}; '
+                             f'with --no-audio {f.labels.end_s:g})')
+    parser.add_argument('--label-ignore', type=float, default=m.labels.ignore_s,
                         metavar='S', help='leave the frames up to S s after the label window '
                         'out of training (default %(default)s: labelled no contact)')
     parser.add_argument('--event-weight', type=float, default=None, metavar='W',
                         help='training weight of the no-contact frames from 20 ms before to '
                              '0.8 s after a simulated knock, touch, brush or set-down starts '
-                             f'(default {m.event_weight:g}; with --no-audio '
-                             f'{f.event_weight:g}: as every other frame)')
+                             f'(default {m.labels.event_weight:g}; with --no-audio '
+                             f'{f.labels.event_weight:g}: as every other frame)')
     parser.add_argument('--threshold', type=float, default=DEFAULT_RULE.threshold)
     parser.add_argument('--confirm-frames', type=int, default=DEFAULT_RULE.confirm_frames)
     parser.add_argument('--refractory', type=float, default=DEFAULT_RULE.refractory_s)
@@ -140,7 +140,7 @@ def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     """Build the FeatureConfig from parsed options."""
     no_audio = bool(getattr(args, 'no_audio', False))
     if args.extra_features is None:
-        extra = DEFAULT_FT_ONLY_EXTRA if no_audio else DEFAULT_FEATURES.extra_features
+        extra = _defaults(args).extra_features
     else:
         extra = tuple(e for e in args.extra_features.split(',') if e)
     return FeatureConfig(audio=not no_audio, ft_window=args.ft_window, ft_hop=args.ft_hop,
@@ -162,10 +162,9 @@ def labels_from_args(args: argparse.Namespace) -> LabelWindow:
     Return the label window the options name (raises ConfigError on a bad window).
 
     An option not given takes the shipped recipe's value: the F/T-only model's with
-    ``--no-audio`` (:data:`DEFAULT_FT_ONLY_LABELS`), else the multimodal model's
-    (:data:`DEFAULT_LABELS`).
+    ``--no-audio``, else the multimodal model's (:func:`recipe_defaults`).
     """
-    d = DEFAULT_FT_ONLY_LABELS if getattr(args, 'no_audio', False) else DEFAULT_LABELS
+    d = _defaults(args).labels
     return LabelWindow(start_s=_given(args.label_start, default=d.start_s),
                        end_s=_given(args.label_end, default=d.end_s),
                        ignore_s=args.label_ignore,
@@ -174,7 +173,7 @@ def labels_from_args(args: argparse.Namespace) -> LabelWindow:
 
 def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the wrench-augmentation ranges shared by train and sweep."""
-    m, f = WrenchAugmentation(), DEFAULT_FT_ONLY_AUGMENTATION
+    m, f = recipe_defaults(ft_only=False).augmentation, recipe_defaults(ft_only=True).augmentation
     parser.add_argument('--augment-tare', type=float, default=None,
                         help=f'augmentation: probability of a tared sensor (default '
                              f'{m.tare_probability:g}; train --no-audio {f.tare_probability:g})')
@@ -188,14 +187,18 @@ def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
     """
     Return the augmentation the options name (raises ConfigError on a bad range).
 
-    A range not given takes the shipped recipe's: the F/T-only model's with ``--no-audio``
-    (:data:`DEFAULT_FT_ONLY_AUGMENTATION`), else the multimodal model's.
+    A range not given takes the shipped recipe's: the F/T-only model's with ``--no-audio``,
+    else the multimodal model's (:func:`recipe_defaults`).
     """
-    d = (DEFAULT_FT_ONLY_AUGMENTATION if getattr(args, 'no_audio', False)
-         else WrenchAugmentation())
+    d = _defaults(args).augmentation
     return WrenchAugmentation(
         tare_probability=_given(args.augment_tare, default=d.tare_probability),
         torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)))
+
+
+def _defaults(args: argparse.Namespace) -> RecipeDefaults:
+    # sweep has no --no-audio: its defaults are the multimodal model's
+    return recipe_defaults(ft_only=bool(getattr(args, 'no_audio', False)))
 
 
 def _given(value: Optional[_T], *, default: _T) -> _T:

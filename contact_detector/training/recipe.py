@@ -25,7 +25,7 @@ from collections import Counter
 from dataclasses import dataclass, replace
 import json
 from pathlib import Path
-from typing import Callable, Dict, Iterable, Optional, Sequence
+from typing import Callable, Dict, Iterable, Optional, Sequence, Tuple
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.factory import stream_spec
@@ -88,6 +88,31 @@ DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.4)
 #: The rule shipped before, slow path at 0.3: still scored by ``sweep --lofo`` for comparison.
 PREVIOUS_RULE = replace(DEFAULT_RULE, sustain_threshold=0.3)
+
+
+@dataclass(frozen=True)
+class RecipeDefaults:
+    """The extra features, labels and wrench augmentation a kind of model trains with."""
+
+    extra_features: Tuple[str, ...]
+    labels: LabelWindow
+    augmentation: WrenchAugmentation
+
+
+def recipe_defaults(*, ft_only: bool) -> RecipeDefaults:
+    """
+    Return the shipped recipe of a model kind: ``train``'s defaults.
+
+    The F/T-only model's (:data:`DEFAULT_FT_ONLY_EXTRA`, :data:`DEFAULT_FT_ONLY_LABELS`,
+    :data:`DEFAULT_FT_ONLY_AUGMENTATION`) if ``ft_only``, else the multimodal model's
+    (:data:`DEFAULT_FEATURES`' extra features, :data:`DEFAULT_LABELS`, and
+    :class:`WrenchAugmentation`'s own defaults).
+    """
+    if ft_only:
+        return RecipeDefaults(extra_features=DEFAULT_FT_ONLY_EXTRA, labels=DEFAULT_FT_ONLY_LABELS,
+                              augmentation=DEFAULT_FT_ONLY_AUGMENTATION)
+    return RecipeDefaults(extra_features=DEFAULT_FEATURES.extra_features, labels=DEFAULT_LABELS,
+                          augmentation=WrenchAugmentation())
 
 
 def sim_parts(*, n: int, seed: int, ft_rate: float, audio_rate: int) -> Dict[str, dict]:
