@@ -50,7 +50,7 @@ from contact_detector.evaluation.report import comparison_table, recording_table
 from contact_detector.io.bags import find_bags
 from contact_detector.io.node_params import read_node_params
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.training.protocol import read_labels_csv
+from contact_detector.training.protocol import match_labels, read_labels_csv
 from tqdm import tqdm
 
 #: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
@@ -96,9 +96,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         found = dict(discover_all(find_bags(args.bags), args=args, params=params,
                                   prog='contact-detector evaluate',
                                   allow_no_audio=make.decides_without_audio))
-        labels = read_labels_csv(args.labels) if args.labels else None
+        labels = (match_labels(rows=read_labels_csv(args.labels), bags=list(found),
+                               csv_path=args.labels) if args.labels else None)
         if labels is not None:
-            missing = [b.name for b in found if b.name not in labels]
+            missing = [str(b) for b in found if b not in labels]
             if missing:
                 raise BagError(f'{args.labels} has no onset for {", ".join(missing[:5])}'
                                + (' ...' if len(missing) > 5 else ''))

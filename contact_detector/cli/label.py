@@ -32,7 +32,8 @@ from typing import Optional, Sequence
 
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.labelling import Proposal, propose_onset
-from contact_detector.io.bags import find_bags, manifest_entry, read_wrench, topic_types
+from contact_detector.io.bags import (find_bags, manifest_entry, read_wrench,
+                                      recording_names, topic_types)
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
 import numpy as np
@@ -156,11 +157,11 @@ def plot_proposal(*, bag: Path, proposal: Proposal, data: dict, output: Path) ->
     return output
 
 
-def row_for(bag: Path, proposal: Proposal, *, length: float) -> list:
-    """One CSV row (see :data:`HEADER`)."""
+def row_for(name: str, proposal: Proposal, *, length: float) -> list:
+    """One CSV row (see :data:`HEADER`) of the bag called ``name``."""
     if proposal.onset_t is None:
-        return [bag.name, '', '', '0.0', proposal.reason]
-    return [bag.name, f'{proposal.onset_t:.6f}', f'{proposal.onset_t + length:.6f}',
+        return [name, '', '', '0.0', proposal.reason]
+    return [name, f'{proposal.onset_t:.6f}', f'{proposal.onset_t + length:.6f}',
             f'{proposal.confidence:.3f}', '']
 
 
@@ -173,21 +174,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f'{PROG}: error: {err}', file=sys.stderr)
         return 1
     rows = []
+    # the file name, or as much of the path as tells apart bags that share it
+    names = recording_names(bags)
     for bag in tqdm(bags, desc='label', unit='bag', disable=len(bags) < 2):
         try:
             proposal, data = label_bag(bag, args=args)
         except ContactDetectorError as err:
-            print(f'{PROG}: {bag.name}: {err}', file=sys.stderr)
-            rows.append([bag.name, '', '', '0.0', f'unreadable: {err}'.replace(',', ';')])
+            print(f'{PROG}: {names[bag]}: {err}', file=sys.stderr)
+            rows.append([names[bag], '', '', '0.0', f'unreadable: {err}'.replace(',', ';')])
             continue
-        rows.append(row_for(bag, proposal, length=args.label_length))
-        print(f'{PROG}: {bag.name}: ' + (
+        rows.append(row_for(names[bag], proposal, length=args.label_length))
+        print(f'{PROG}: {names[bag]}: ' + (
             f'onset {proposal.onset_t:.4f} ({proposal.source}) confidence '
             f'{proposal.confidence:.2f}' if proposal.onset_t is not None
             else f'no onset ({proposal.reason})'))
         if args.plots is not None:
             plot_proposal(bag=bag, proposal=proposal, data=data,
-                          output=args.plots / f'{bag.name}.png')
+                          output=args.plots / f'{names[bag]}.png')
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, 'w', newline='') as handle:
         writer = csv.writer(handle)

@@ -50,7 +50,7 @@ from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import read_labels_csv, unlabelled_bags
+from contact_detector.training.protocol import match_labels, read_labels_csv, unlabelled_bags
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
                                               simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
@@ -123,12 +123,14 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
                                                    prog='contact-detector train',
                                                    allow_no_audio=config.ft_only))
     user_bags = list(found)
-    csv_onsets = read_labels_csv(args.labels) if args.labels else None
+    csv_onsets = (match_labels(rows=read_labels_csv(args.labels), bags=user_bags,
+                               csv_path=args.labels) if args.labels else None)
     if csv_onsets is not None:
-        skipped = unlabelled_bags(args.labels)
-        user_bags = [b for b in user_bags if b.name in csv_onsets or b.name not in skipped]
+        skipped = match_labels(rows=unlabelled_bags(args.labels), bags=user_bags,
+                               csv_path=args.labels)
+        user_bags = [b for b in user_bags if b in csv_onsets or b not in skipped]
         found = {b: found[b] for b in user_bags}     # bags label could not label are left out
-        missing = [b.name for b in user_bags if b.name not in csv_onsets]
+        missing = [str(b) for b in user_bags if b not in csv_onsets]
         if missing:
             print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
                   file=sys.stderr)

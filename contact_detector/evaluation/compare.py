@@ -28,6 +28,7 @@ from contact_detector.evaluation.metrics import (frame_labels, frame_report, out
                                                  score_onsets, score_trial,
                                                  summarize_by_condition)
 from contact_detector.evaluation.truth import conditions_of, truth_for
+from contact_detector.io.bags import recording_names
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 import numpy as np
@@ -38,7 +39,7 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
              label_window: Optional[dict] = None,
              found: Optional[Dict[Path, Streams]] = None,
              stream: Optional[dict] = None,
-             labels: Optional[Dict[str, List[float]]] = None,
+             labels: Optional[Dict[Path, List[float]]] = None,
              make_ft=None, progress: Callable[[Iterable], Iterable] = iter,
              log: Callable[[str], None] = lambda _line: None) -> Dict[str, dict]:
     """
@@ -46,8 +47,10 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
 
     ``found`` (bag -> discovered :class:`Streams`) replaces ``spec`` and the two rates per bag;
     ``stream`` holds the parameter file's stream fields (the audio channel); ``labels`` (bag
-    name -> onsets, s, from :func:`read_labels_csv`) is the truth where given, every onset
-    scored (:func:`score_onsets`).
+    -> onsets, s, from :func:`~contact_detector.training.protocol.match_labels`) is the truth
+    where given, every onset scored (:func:`score_onsets`). Recordings are named by
+    :func:`~contact_detector.io.bags.recording_names` (the file name, or as much of the path
+    as tells apart bags that share it).
 
     ``make_forest(streams, has_audio=...)`` gives the ``forest`` detector of a recording with or
     without an audio topic (:class:`contact_detector.detection.factory.DetectorFactory`);
@@ -62,6 +65,7 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
 
     """
     manifest = conditions_of(bags)
+    names = recording_names(bags)
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     recordings: Dict[str, dict] = {d: {} for d in detectors}
     y_true, y_pred = [], []
@@ -73,8 +77,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
             spec = stream_spec(streams, stream or {})
             audio_rate, wrench_rate = streams.audio_rate, streams.wrench_rate
         events = load_events(bag, spec=spec)
-        onsets = (labels or {}).get(bag.name)
-        truth = None if onsets else truth_for(bag, events, manifest)
+        onsets = (labels or {}).get(bag)
+        truth = None if onsets else truth_for(bag, events, manifest, name=names[bag])
         onsets = onsets or [truth.onset_t]
         has_audio = streams.has_audio if streams is not None else True
         for name in detectors:
@@ -98,12 +102,12 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
                 log(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}')
             run = run_detector(events, detector=detector)
             if truth is None:
-                outcomes[name].extend(score_onsets(name=bag.name, condition='labels',
+                outcomes[name].extend(score_onsets(name=names[bag], condition='labels',
                                                    onsets=onsets, events=run.events))
             else:
                 outcomes[name].append(score_trial(truth=truth, releases=run.releases,
                                                   events=run.events))
-            recordings[name][bag.name] = {
+            recordings[name][names[bag]] = {
                 'onsets': sorted(onsets), 'events': [float(t) for t in run.events],
                 't0': float(run.t[0]) if run.t.size else min(onsets),
                 't1': float(run.t[-1]) if run.t.size else max(onsets)}

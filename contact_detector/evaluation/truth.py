@@ -16,7 +16,7 @@
 
 import json
 from pathlib import Path
-from typing import Sequence
+from typing import Optional, Sequence
 
 from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import Truth
@@ -38,11 +38,16 @@ def conditions_of(bags: Sequence[Path]) -> dict:
     return out
 
 
-def truth_for(bag: Path, events, manifest: dict) -> Truth:
-    """Ground truth of one bag: the manifest's entry, else the truth topic."""
+def truth_for(bag: Path, events, manifest: dict, *, name: Optional[str] = None) -> Truth:
+    """
+    Ground truth of one bag: the manifest's entry, else the truth topic.
+
+    ``name`` is the bag's name in reports (default its file name).
+    """
+    name = name or bag.name
     info = manifest.get(bag)
     if info is not None:
-        return Truth(name=bag.name, condition=info.get('condition', ''),
+        return Truth(name=name, condition=info.get('condition', ''),
                      onset_t=float(info['onset_t']), contact_end_t=info.get('contact_end_t'),
                      impacts=tuple((float(i['t']), i['kind'], bool(i['in_air']))
                                    for i in info.get('impacts', [])),
@@ -51,7 +56,7 @@ def truth_for(bag: Path, events, manifest: dict) -> Truth:
     onsets = truth_onsets(events)
     if not onsets:
         raise BagError(f'{bag}: no manifest entry and no True on /contact_truth')
-    return Truth(name=bag.name, condition='', onset_t=onsets[0][0])
+    return Truth(name=name, condition='', onset_t=onsets[0][0])
 
 
 def knocked_in_air(truth: Truth) -> bool:

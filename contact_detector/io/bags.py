@@ -158,6 +158,36 @@ def find_bags(paths: Sequence[str | Path]) -> list[Path]:
     return out
 
 
+def recording_names(bags: Sequence[Path]) -> dict[Path, str]:
+    """
+    Name each bag by the shortest end of its path that no other bag's path ends with.
+
+    Bags from different folders often share a file name (``day1/trial_0000``,
+    ``day2/trial_0000``); reports keyed by the name alone would merge them.
+
+    Parameters
+    ----------
+    bags : sequence of Path
+        Bags, e.g. from :func:`find_bags`.
+
+    Returns
+    -------
+    dict
+        Bag -> its name (``trial_0000``) when that is unique, else the fewest trailing path
+        parts that are (``day1/trial_0000``).
+
+    """
+    parts = {bag: Path(bag).resolve().parts for bag in bags}
+    out = {}
+    for bag, mine in parts.items():
+        k = 1
+        while k < len(mine) and any(other[-k:] == mine[-k:]
+                                    for b, other in parts.items() if b != bag):
+            k += 1
+        out[bag] = '/'.join(mine[-k:])
+    return out
+
+
 def _complete_typestore(reader: AnyReader) -> None:
     """Add Jazzy's types that the bag did not embed (AnyReader uses only the embedded ones)."""
     jazzy = jazzy_typestore()

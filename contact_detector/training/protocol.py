@@ -25,7 +25,7 @@ report that split and a split by *trial*, and quote the trial split.
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Sequence
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, TypeVar
 import warnings
 
 from contact_detector.detection.offline import run_features
@@ -36,6 +36,8 @@ from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 from contact_detector.training.augmentation import augment_events, WrenchAugmentation
 import numpy as np
+
+T = TypeVar('T')
 
 SPLIT = (0.56, 0.19, 0.25)
 #: The frames :meth:`LabelWindow.weights` weighs: from 20 ms before an exogenous event's start
@@ -242,11 +244,11 @@ def trial_features(*, bag: Path, config: FeatureConfig, spec: StreamSpec, audio_
 
 def read_labels_csv(path: Path) -> Dict[str, List[float]]:
     """
-    Read ``bag,onset_start,onset_end[,confidence[,reason]]`` rows into bag -> onsets.
+    Read ``bag,onset_start,onset_end[,confidence[,reason]]`` rows into ``bag`` cell -> onsets.
 
     A header row is allowed. A row with an empty ``onset_start`` (``contact-detector label``
     could not label that bag; its last cell says why) is skipped with a ``UserWarning``; see
-    :func:`unlabelled_bags` for those bags.
+    :func:`unlabelled_bags` for those bags, and :func:`match_labels` for the bag a cell names.
 
     Raises
     ------
@@ -264,14 +266,68 @@ def read_labels_csv(path: Path) -> Dict[str, List[float]]:
         if len(cells) < 2 or not _is_float(cells[1]):
             raise BagError(f'{path}:{number}: expected "bag,onset_start,onset_end", '
                            f'got {line!r}')
-        out.setdefault(Path(cells[0]).name, []).append(float(cells[1]))
+        out.setdefault(cells[0], []).append(float(cells[1]))
     return out
 
 
 def unlabelled_bags(path: Path) -> Dict[str, str]:
-    """Bags of a labels CSV whose row has no onset -> the reason given (may be '')."""
-    return {Path(c[0]).name: (c[-1] if len(c) > 3 else '')
+    """``bag`` cells of a labels CSV whose row has no onset -> the reason given (may be '')."""
+    return {c[0]: (c[-1] if len(c) > 3 else '')
             for _n, c, _line in _label_rows(path) if len(c) > 1 and c[1] == ''}
+
+
+def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path) -> Dict[Path, T]:
+    """
+    Find the bag each row of a labels CSV names.
+
+    A row's ``bag`` cell is a path: absolute, or relative to the CSV's folder or to the
+    working directory. A cell that is no such path names the bag whose path ends with it
+    (``trial_0003``, ``day1/trial_0003``) if exactly one bag does. Rows that name none of
+    ``bags`` are left out (a CSV may label more recordings than one command reads).
+
+    Parameters
+    ----------
+    rows : mapping
+        ``bag`` cell -> value, from :func:`read_labels_csv` or :func:`unlabelled_bags`.
+    bags : sequence of Path
+        The bags of the command.
+    csv_path : Path
+        The CSV file.
+
+    Returns
+    -------
+    dict
+        Bag -> the value of the row that names it.
+
+    Raises
+    ------
+    BagError
+        A cell ends the paths of several bags, or two rows name the same bag.
+
+    """
+    resolved = {bag: Path(bag).resolve() for bag in bags}
+    by_path = {path: bag for bag, path in resolved.items()}
+    out: Dict[Path, T] = {}
+    cell_of: Dict[Path, str] = {}
+    for cell, value in rows.items():
+        written = Path(cell)
+        places = ([written] if written.is_absolute()
+                  else [Path(csv_path).resolve().parent / written, written.resolve()])
+        hits = list(dict.fromkeys(by_path[p.resolve()] for p in places
+                                  if p.resolve() in by_path))
+        if not hits:
+            tail = written.parts
+            hits = [bag for bag, path in resolved.items() if path.parts[-len(tail):] == tail]
+            if len(hits) > 1:
+                raise BagError(
+                    f'{csv_path}: {cell!r} could be any of {len(hits)} bags ('
+                    + ', '.join(str(b) for b in hits[:3]) + (', ...' if len(hits) > 3 else '')
+                    + '); write the path of the bag, relative to the CSV')
+        for bag in hits:
+            if bag in out:
+                raise BagError(f'{csv_path}: rows {cell_of[bag]!r} and {cell!r} both name {bag}')
+            out[bag], cell_of[bag] = value, cell
+    return out
 
 
 def _label_rows(path: Path):

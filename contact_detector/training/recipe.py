@@ -273,7 +273,7 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
     """
     sources = {}
     if user:
-        contacts = sum(len(csv_onsets[b.name]) for b in user) if csv_onsets else len(user)
+        contacts = sum(len(csv_onsets[b]) for b in user) if csv_onsets else len(user)
         sources['recordings'] = {
             'count': len(user), 'contacts': contacts, 'bags': sorted(b.name for b in user),
             'labels': f'{labels_path.name} (--labels)' if labels_path else
@@ -305,7 +305,7 @@ def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec
     Run the full detector on held-out bags; return the event summary.
 
     ``found`` (bag -> discovered Streams) replaces ``spec`` and the rates per bag; ``labels``
-    (bag name -> onsets) is the truth of the bags it names, every onset scored
+    (bag -> onsets) is the truth of the bags it names, every onset scored
     (:func:`score_onsets`); other bags are scored against their manifest entry.
     """
     outcomes = []
@@ -319,9 +319,9 @@ def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec
         detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
             audio_rate=audio_rate, wrench_rate=wrench_rate))
         run = run_detector(events, detector=detector)
-        if bag.name in (labels or {}):
+        if bag in (labels or {}):
             outcomes.extend(score_onsets(name=bag.name, condition='recordings',
-                                         onsets=labels[bag.name], events=run.events))
+                                         onsets=labels[bag], events=run.events))
             continue
         info = manifest.get(bag)
         if info is None:
@@ -383,7 +383,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     user_bags : sequence of Path
         The recordings among them (the rest are simulated trials, named ``sim/<name>``).
     csv_onsets : dict or None
-        Bag name -> labelled onsets, s (``--labels``), for the recordings it names.
+        Bag -> labelled onsets, s (``--labels``, :func:`.protocol.match_labels`).
     manifest : dict
         Bag -> simulator manifest entry (:func:`~contact_detector.evaluation.truth.conditions_of`).
     sources : dict
@@ -436,7 +436,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
                               audio_rate=streams.audio_rate or NO_AUDIO_RATE,
                               wrench_rate=streams.wrench_rate, label_window=labels,
-                              onsets=csv_onsets[bag.name] if csv_onsets and bag in user
+                              onsets=csv_onsets[bag] if csv_onsets and bag in user
                               else None,
                               condition=manifest.get(bag, {}).get('condition', ''),
                               augmentation=augmentation,
@@ -489,6 +489,6 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         metrics['events_test_trials'] = event_metrics(
             bundle=bundle, bags=progress(test_bags, 'events'), spec=StreamSpec(),
             audio_rate=16000.0, wrench_rate=100.0, manifest=manifest, found=found,
-            labels={b.name: csv_onsets[b.name] for b in test_bags if b in user}
+            labels={b: csv_onsets[b] for b in test_bags if b in user}
             if csv_onsets else None)
     return TrainedModel(bundle=bundle, results=results, x=x, training=training, metrics=metrics)

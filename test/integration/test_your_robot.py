@@ -105,6 +105,31 @@ def test_evaluate_takes_the_labels_csv_as_truth(recordings, tmp_path, capsys):
     assert '## Per recording' in summary and (tmp_path / 'csv' / 'recordings.png').stat().st_size
 
 
+def test_bags_that_share_a_name_are_labelled_and_reported_apart(recordings, tmp_path,
+                                                                capsys):
+    # Two days of recordings, each day's bags named alike: the CSV names them by path.
+    bag = sorted(recordings['onsets'])[0]
+    onset = recordings['onsets'][bag]
+    for day in ('day1', 'day2'):
+        (tmp_path / day).mkdir()
+        (tmp_path / day / bag).write_bytes((recordings['bags'] / bag).read_bytes())
+    labels = write_labels(tmp_path / 'labels.csv', {f'day1/{bag}': [onset],
+                                                    f'day2/{bag}': [onset + 3.0]})
+    days = [str(tmp_path / 'day1'), str(tmp_path / 'day2')]
+    assert evaluate_cli.main([*days, '--labels', str(labels), '--report',
+                              str(tmp_path / 'out')]) == 0
+    printed = capsys.readouterr().out
+    assert f'| day1/{bag} | 1 |' in printed and f'| day2/{bag} | 1 |' in printed
+    verdicts = {o['name']: o['verdict'] for o in
+                json.loads((tmp_path / 'out' / 'trials.json').read_text())['forest']}
+    # the same recording, labelled 3 s later on day 2: released before that label
+    assert verdicts == {f'day1/{bag}': 'detected', f'day2/{bag}': 'premature'}
+    # A CSV that names the bag alone cannot say which day it means: a clear error.
+    bare = write_labels(tmp_path / 'bare.csv', {bag: [onset]})
+    assert evaluate_cli.main([*days, '--labels', str(bare)]) == 1
+    assert f"'{bag}' could be any of 2 bags" in capsys.readouterr().err
+
+
 def test_evaluate_scores_every_contact_of_a_recording(recordings, tmp_path, capsys):
     bag = sorted(recordings['onsets'])[0]
     onset = recordings['onsets'][bag]
