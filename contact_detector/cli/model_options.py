@@ -181,6 +181,16 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
                         help='augmentation: torque scale range LOW,HIGH, log-uniform (default '
                              f'{m.torque_scale[0]:g},{m.torque_scale[1]:g}; train --no-audio '
                              f'{f.torque_scale[0]:g},{f.torque_scale[1]:g})')
+    parser.add_argument('--augment-offset', type=float, default=None,
+                        help='augmentation: probability that an untared trial reads with a '
+                             f'sensor offset of up to +-{m.offset_force_n:g} N and '
+                             f'+-{m.offset_torque_nm:g} N m per axis (default '
+                             f'{m.offset_probability:g}; train --no-audio '
+                             f'{f.offset_probability:g})')
+    parser.add_argument('--augment-contact-offset', type=float, default=None, metavar='M',
+                        help='augmentation: every load change acts up to M m away from where '
+                             f'it was simulated (default {m.contact_offset_m:g}; train '
+                             f'--no-audio {f.contact_offset_m:g})')
 
 
 def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
@@ -193,7 +203,9 @@ def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
     d = _defaults(args).augmentation
     return WrenchAugmentation(
         tare_probability=_given(args.augment_tare, default=d.tare_probability),
-        torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)))
+        torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)),
+        offset_probability=_given(args.augment_offset, default=d.offset_probability),
+        contact_offset_m=_given(args.augment_contact_offset, default=d.contact_offset_m))
 
 
 def _defaults(args: argparse.Namespace) -> RecipeDefaults:

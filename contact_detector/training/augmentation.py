@@ -29,6 +29,16 @@ computed, instead of simulating every family again:
   lowering it. The tare is drawn per trial with probability ``tare_probability``, over
   ``tare_window_s`` after the first wrench sample (the robot at rest holding the object: the
   simulator's trials rest for at least 1 s before the lift).
+- **A sensor never zeroed.** Strain-gauge sensors read an offset of several newtons that
+  nobody removed, so the carried load they report is the weight plus that offset and points
+  elsewhere. With probability ``offset_probability`` (on an untared draw) a constant ``b`` is
+  added, each axis uniform in ``+-offset_force_n`` and ``+-offset_torque_nm``.
+- **The contact elsewhere than under the centre of mass.** An object touches down on its edge
+  or off to one side of the point it hangs from, so the torque of the contact does not undo
+  the torque of the weight. Every load change is moved by a vector ``d`` drawn uniformly in
+  the ball of radius ``contact_offset_m``: ``T' += d x (F - F_rest)``, ``F_rest`` the mean
+  force over the tare window. It is exact for the contact and moves the point of a knock or a
+  touch by the same ``d``.
 
 Rotating the sensor frame is not drawn: every F/T feature is a function of vector norms or
 of differences of vectors (docs/features.md), which a rotation leaves unchanged.
@@ -37,7 +47,7 @@ The audio, the truth and the stamps are passed through untouched; the draw depen
 ``seed``, so a trial gets the same augmentation in every run.
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 import math
 from typing import List, Sequence, Tuple
 import zlib
@@ -64,6 +74,12 @@ class WrenchAugmentation:
         (start, end) of the tare window in s after the first wrench sample, ``0 <= start < end``.
     torque_scale : tuple of float
         (low, high) of the log-uniform torque scale ``s``, ``0 < low <= high``.
+    offset_probability : float
+        Probability, in [0, 1], that an untared trial is read with a sensor offset.
+    offset_force_n, offset_torque_nm : float
+        Largest offset per axis, N and N m (>= 0).
+    contact_offset_m : float
+        Radius of the ball the contact offset ``d`` is drawn from, m (>= 0; 0: none).
 
     """
 
@@ -73,6 +89,10 @@ class WrenchAugmentation:
     tare_probability: float = 0.25
     tare_window_s: Tuple[float, float] = (0.2, 0.6)
     torque_scale: Tuple[float, float] = (0.5, 2.0)
+    offset_probability: float = 0.0
+    offset_force_n: float = 10.0
+    offset_torque_nm: float = 0.5
+    contact_offset_m: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate the ranges (raises ConfigError)."""
@@ -80,6 +100,9 @@ class WrenchAugmentation:
             p = float(self.tare_probability)
             w0, w1 = (float(v) for v in self.tare_window_s)
             lo, hi = (float(v) for v in self.torque_scale)
+            q = float(self.offset_probability)
+            sizes = (float(self.offset_force_n), float(self.offset_torque_nm),
+                     float(self.contact_offset_m))
         except (TypeError, ValueError) as err:
             raise ConfigError(f'WrenchAugmentation: not numbers: {self}') from err
         if not 0.0 <= p <= 1.0:
@@ -88,20 +111,33 @@ class WrenchAugmentation:
             raise ConfigError(f'tare_window_s must be 0 <= start < end, got {self.tare_window_s}')
         if not 0.0 < lo <= hi or not math.isfinite(hi):
             raise ConfigError(f'torque_scale must be 0 < low <= high, got {self.torque_scale}')
+        if not 0.0 <= q <= 1.0:
+            raise ConfigError(f'offset_probability must be in [0, 1], got {q}')
+        if not all(0.0 <= v < math.inf for v in sizes):
+            raise ConfigError(f'offset sizes must be finite and >= 0, got {sizes}')
 
     def to_dict(self) -> dict:
         """Return the settings as a JSON-ready dict (for the model card)."""
-        return {'tare_probability': self.tare_probability,
-                'tare_window_s': list(self.tare_window_s),
-                'torque_scale': list(self.torque_scale)}
+        out = {'tare_probability': self.tare_probability,
+               'tare_window_s': list(self.tare_window_s),
+               'torque_scale': list(self.torque_scale)}
+        if self.offset_probability > 0:
+            out.update(offset_probability=self.offset_probability,
+                       offset_force_n=self.offset_force_n,
+                       offset_torque_nm=self.offset_torque_nm)
+        if self.contact_offset_m > 0:
+            out['contact_offset_m'] = self.contact_offset_m
+        return out
 
 
 @dataclass(frozen=True)
 class WrenchDraw:
-    """One trial's draw: the torque scale and whether the sensor is tared."""
+    """One trial's draw: the torque scale, a tare, the sensor offset and the contact offset."""
 
     torque_scale: float
     tared: bool
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    contact_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
 def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw:
@@ -118,14 +154,23 @@ def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw
     Returns
     -------
     WrenchDraw
-        ``s = exp(U(log low, log high))``, ``tared ~ Bernoulli(tare_probability)``.
+        ``s = exp(U(log low, log high))``, ``tared ~ Bernoulli(tare_probability)``; untared,
+        the offset with probability ``offset_probability``; ``d`` uniform in the ball.
 
     """
     rng = np.random.default_rng(list(seed))
     lo, hi = augmentation.torque_scale
     scale = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
     tared = bool(rng.uniform() < augmentation.tare_probability)
-    return WrenchDraw(torque_scale=scale, tared=tared)
+    # drawn after the first two so that trials keep the scale and tare they had before
+    offset = np.zeros(6)
+    if rng.uniform() < augmentation.offset_probability and not tared:
+        size = np.repeat([augmentation.offset_force_n, augmentation.offset_torque_nm], 3)
+        offset = rng.uniform(-1.0, 1.0, 6) * size
+    direction = rng.normal(size=3)
+    radius = augmentation.contact_offset_m * rng.uniform() ** (1.0 / 3.0)
+    contact = direction / max(float(np.linalg.norm(direction)), 1e-12) * radius
+    return WrenchDraw(torque_scale=scale, tared=tared, offset=offset, contact_offset=contact)
 
 
 def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
@@ -133,10 +178,11 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     """
     Return the events with the wrench of one drawn augmentation.
 
-    ``F' = F - tared * mean_w(F)`` and ``T' = s T - tared * mean_w(s T)``, where ``mean_w`` is
-    the mean over the samples stamped in the tare window (``tare_window_s`` after the first
-    wrench stamp). If the recording has no sample in that window, the tare is skipped (the
-    scale still applies).
+    ``F' = F - tared * mean_w(F) + b_F`` and ``T' = s T + d x (F - mean_w(F)) - tared *
+    mean_w(s T) + b_T``, where ``mean_w`` is the mean over the samples stamped in the tare
+    window (``tare_window_s`` after the first wrench stamp), ``b`` the sensor offset and ``d``
+    the contact offset of the draw. If the recording has no sample in that window, the tare and
+    the contact offset are skipped (the scale and the offset still apply).
 
     Parameters
     ----------
@@ -155,22 +201,29 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     """
     choice = draw(augmentation=augmentation, seed=seed)
     wrenches = [e for e in events if isinstance(e, WrenchEvent)]
-    bias_f = np.zeros(3)
-    bias_t = np.zeros(3)
-    if choice.tared and wrenches:
+    bias_f = -choice.offset[:3]
+    bias_t = -choice.offset[3:]
+    rest_f = None
+    if wrenches:
         t = np.concatenate([e.t for e in wrenches])
         w0, w1 = augmentation.tare_window_s
         first = float(t.min()) if t.size else 0.0
         keep = (t >= first + w0) & (t < first + w1)
         if keep.any():
-            bias_f = np.concatenate([e.force for e in wrenches])[keep].mean(axis=0)
-            bias_t = (choice.torque_scale
-                      * np.concatenate([e.torque for e in wrenches])[keep].mean(axis=0))
+            rest_f = np.concatenate([e.force for e in wrenches])[keep].mean(axis=0)
+            if choice.tared:
+                bias_f = rest_f
+                bias_t = (choice.torque_scale
+                          * np.concatenate([e.torque for e in wrenches])[keep].mean(axis=0))
+    d = choice.contact_offset if rest_f is not None else np.zeros(3)
+    moved = bool(np.any(d))
     out: List[Event] = []
     for e in events:
         if isinstance(e, WrenchEvent):
-            e = replace(e, force=e.force - bias_f,
-                        torque=choice.torque_scale * e.torque - bias_t)
+            torque = choice.torque_scale * e.torque - bias_t
+            if moved:
+                torque = torque + np.cross(d, e.force - rest_f)
+            e = replace(e, force=e.force - bias_f, torque=torque)
         out.append(e)
     return out
 

@@ -128,3 +128,68 @@ def test_truth_and_recordings_without_the_tare_window_pass_through():
     assert out[0] is events[0]
     np.testing.assert_array_equal(out[1].force, np.ones((2, 3)))   # no sample to tare on
     np.testing.assert_allclose(out[1].torque, 2.0 * np.ones((2, 3)))
+
+
+def test_an_unzeroed_sensor_adds_one_constant_offset_and_a_tared_one_none():
+    events = _placing()
+    aug = WrenchAugmentation(tare_probability=0.0, torque_scale=(1.0, 1.0),
+                             offset_probability=1.0, offset_force_n=10.0, offset_torque_nm=0.5)
+    _t0, f0, tq0 = _wrench(events)
+    offsets = []
+    for name in ('a', 'b', 'c'):
+        _t1, f1, tq1 = _wrench(augment_events(events, augmentation=aug,
+                                              seed=trial_seed(seed=2, name=name)))
+        b_f, b_t = f1 - f0, tq1 - tq0
+        # one constant per trial, within the size per axis
+        np.testing.assert_allclose(b_f, b_f[:1].repeat(len(b_f), axis=0), atol=1e-12)
+        np.testing.assert_allclose(b_t, b_t[:1].repeat(len(b_t), axis=0), atol=1e-12)
+        assert np.all(np.abs(b_f[0]) <= 10.0) and np.all(np.abs(b_t[0]) <= 0.5)
+        offsets.append(b_f[0])
+    assert len({tuple(o) for o in offsets}) == 3
+    # a sensor tared at rest has no offset left: it reads the load change alone
+    tared = WrenchAugmentation(tare_probability=1.0, torque_scale=(1.0, 1.0),
+                               offset_probability=1.0)
+    _t, f, _tq = _wrench(augment_events(events, augmentation=tared,
+                                        seed=trial_seed(seed=2, name='a')))
+    assert np.abs(f[20:60].mean(axis=0)).max() < 0.02
+    # the scale and the tare of a trial are those it drew before offsets existed
+    for name in ('a', 'b', 'c'):
+        seed = trial_seed(seed=3, name=name)
+        old = draw(augmentation=WrenchAugmentation(), seed=seed)
+        new = draw(augmentation=WrenchAugmentation(offset_probability=0.7,
+                                                   contact_offset_m=0.1), seed=seed)
+        assert (new.torque_scale, new.tared) == (old.torque_scale, old.tared)
+
+
+def test_a_contact_offset_moves_the_torque_of_every_load_change_only():
+    events = _placing()
+    aug = WrenchAugmentation(tare_probability=0.0, torque_scale=(1.0, 1.0),
+                             contact_offset_m=0.08)
+    t0, f0, tq0 = _wrench(events)
+    seed = trial_seed(seed=4, name='a')
+    d = draw(augmentation=aug, seed=seed).contact_offset
+    assert 0.0 < np.linalg.norm(d) <= 0.08
+    t1, f1, tq1 = _wrench(augment_events(events, augmentation=aug, seed=seed))
+    np.testing.assert_array_equal(f1, f0)
+    rest = f0[(t0 >= t0[0] + 0.2) & (t0 < t0[0] + 0.6)].mean(axis=0)
+    np.testing.assert_allclose(tq1, tq0 + np.cross(d, f0 - rest), atol=1e-12)
+    # at rest nothing moves; after the table takes half the weight the torque of that change
+    # is that of a table pushing at LEVER + d
+    at_rest = t0 < 2.4
+    assert np.abs(tq1[at_rest] - tq0[at_rest]).max() < 0.01
+    late = t0 > 3.0
+    change = f0[late].mean(axis=0) - rest
+    np.testing.assert_allclose(tq1[late].mean(axis=0) - tq0[:100].mean(axis=0),
+                               np.cross(LEVER + d, change), atol=2e-3)
+
+
+def test_offset_settings_are_checked_and_written_to_the_card_only_when_used():
+    with pytest.raises(ConfigError, match='offset_probability'):
+        WrenchAugmentation(offset_probability=1.5)
+    with pytest.raises(ConfigError, match='offset sizes'):
+        WrenchAugmentation(contact_offset_m=-0.1)
+    assert set(WrenchAugmentation().to_dict()) == {'tare_probability', 'tare_window_s',
+                                                   'torque_scale'}
+    card = WrenchAugmentation(offset_probability=0.5, contact_offset_m=0.05).to_dict()
+    assert card['offset_probability'] == 0.5 and card['contact_offset_m'] == 0.05
+    assert card['offset_force_n'] == 10.0 and card['offset_torque_nm'] == 0.5
