@@ -187,6 +187,9 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
                              f'+-{m.offset_torque_nm:g} N m per axis (default '
                              f'{m.offset_probability:g}; train --no-audio '
                              f'{f.offset_probability:g})')
+    parser.add_argument('--augment-gain', type=scale_range, default=None, metavar='LOW,HIGH',
+                        help='augmentation: the whole wrench times a gain drawn log-uniformly '
+                             f'from LOW,HIGH (default {m.gain[0]:g},{m.gain[1]:g})')
     parser.add_argument('--augment-contact-offset', type=float, default=None, metavar='M',
                         help='augmentation: every load change acts up to M m away from where '
                              f'it was simulated (default {m.contact_offset_m:g}; train '
@@ -205,7 +208,8 @@ def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
         tare_probability=_given(args.augment_tare, default=d.tare_probability),
         torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)),
         offset_probability=_given(args.augment_offset, default=d.offset_probability),
-        contact_offset_m=_given(args.augment_contact_offset, default=d.contact_offset_m))
+        contact_offset_m=_given(args.augment_contact_offset, default=d.contact_offset_m),
+        gain=tuple(_given(args.augment_gain, default=d.gain)))
 
 
 def _defaults(args: argparse.Namespace) -> RecipeDefaults:

@@ -33,6 +33,10 @@ computed, instead of simulating every family again:
   nobody removed, so the carried load they report is the weight plus that offset and points
   elsewhere. With probability ``offset_probability`` (on an untared draw) a constant ``b`` is
   added, each axis uniform in ``+-offset_force_n`` and ``+-offset_torque_nm``.
+- **Lighter or heavier loads.** A 0.2 kg cup on a quiet industrial sensor gives the same
+  shapes as a 1 kg glass on the simulated one, a fifth as large. With ``gain`` other than
+  ``(1, 1)`` the whole wrench is multiplied by ``g`` drawn log-uniformly from it per trial:
+  every load (object, hand, contact, knock, noise) ``g`` times as large.
 - **The contact elsewhere than under the centre of mass.** An object touches down on its edge
   or off to one side of the point it hangs from, so the torque of the contact does not undo
   the torque of the weight. Every load change is moved by a vector ``d`` drawn uniformly in
@@ -80,6 +84,8 @@ class WrenchAugmentation:
         Largest offset per axis, N and N m (>= 0).
     contact_offset_m : float
         Radius of the ball the contact offset ``d`` is drawn from, m (>= 0; 0: none).
+    gain : tuple of float
+        (low, high) of the log-uniform gain ``g`` on the whole wrench, ``0 < low <= high``.
 
     """
 
@@ -93,6 +99,7 @@ class WrenchAugmentation:
     offset_force_n: float = 10.0
     offset_torque_nm: float = 0.5
     contact_offset_m: float = 0.0
+    gain: Tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
         """Validate the ranges (raises ConfigError)."""
@@ -103,6 +110,7 @@ class WrenchAugmentation:
             q = float(self.offset_probability)
             sizes = (float(self.offset_force_n), float(self.offset_torque_nm),
                      float(self.contact_offset_m))
+            g_lo, g_hi = (float(v) for v in self.gain)
         except (TypeError, ValueError) as err:
             raise ConfigError(f'WrenchAugmentation: not numbers: {self}') from err
         if not 0.0 <= p <= 1.0:
@@ -115,6 +123,8 @@ class WrenchAugmentation:
             raise ConfigError(f'offset_probability must be in [0, 1], got {q}')
         if not all(0.0 <= v < math.inf for v in sizes):
             raise ConfigError(f'offset sizes must be finite and >= 0, got {sizes}')
+        if not 0.0 < g_lo <= g_hi or not math.isfinite(g_hi):
+            raise ConfigError(f'gain must be 0 < low <= high, got {self.gain}')
 
     def to_dict(self) -> dict:
         """Return the settings as a JSON-ready dict (for the model card)."""
@@ -127,6 +137,8 @@ class WrenchAugmentation:
                        offset_torque_nm=self.offset_torque_nm)
         if self.contact_offset_m > 0:
             out['contact_offset_m'] = self.contact_offset_m
+        if tuple(self.gain) != (1.0, 1.0):
+            out['gain'] = list(self.gain)
         return out
 
 
@@ -138,6 +150,7 @@ class WrenchDraw:
     tared: bool
     offset: np.ndarray = field(default_factory=lambda: np.zeros(6))
     contact_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    gain: float = 1.0
 
 
 def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw:
@@ -155,7 +168,8 @@ def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw
     -------
     WrenchDraw
         ``s = exp(U(log low, log high))``, ``tared ~ Bernoulli(tare_probability)``; untared,
-        the offset with probability ``offset_probability``; ``d`` uniform in the ball.
+        the offset with probability ``offset_probability``; ``d`` uniform in the ball;
+        ``g = exp(U(log low, log high))`` of ``gain``.
 
     """
     rng = np.random.default_rng(list(seed))
@@ -170,7 +184,10 @@ def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw
     direction = rng.normal(size=3)
     radius = augmentation.contact_offset_m * rng.uniform() ** (1.0 / 3.0)
     contact = direction / max(float(np.linalg.norm(direction)), 1e-12) * radius
-    return WrenchDraw(torque_scale=scale, tared=tared, offset=offset, contact_offset=contact)
+    g_lo, g_hi = augmentation.gain
+    gain = float(np.exp(rng.uniform(np.log(g_lo), np.log(g_hi))))
+    return WrenchDraw(torque_scale=scale, tared=tared, offset=offset, contact_offset=contact,
+                      gain=gain)
 
 
 def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
@@ -178,11 +195,12 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     """
     Return the events with the wrench of one drawn augmentation.
 
-    ``F' = F - tared * mean_w(F) + b_F`` and ``T' = s T + d x (F - mean_w(F)) - tared *
-    mean_w(s T) + b_T``, where ``mean_w`` is the mean over the samples stamped in the tare
-    window (``tare_window_s`` after the first wrench stamp), ``b`` the sensor offset and ``d``
-    the contact offset of the draw. If the recording has no sample in that window, the tare and
-    the contact offset are skipped (the scale and the offset still apply).
+    ``F' = g (F - tared * mean_w(F)) + b_F`` and ``T' = g (s T + d x (F - mean_w(F)) - tared
+    * mean_w(s T)) + b_T``, where ``mean_w`` is the mean over the samples stamped in the tare
+    window (``tare_window_s`` after the first wrench stamp), and ``g``, ``b`` and ``d`` are the
+    gain, the sensor offset and the contact offset of the draw. If the recording has no sample
+    in that window, the tare and the contact offset are skipped (the scale, the gain and the
+    offset still apply).
 
     Parameters
     ----------
@@ -201,8 +219,8 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     """
     choice = draw(augmentation=augmentation, seed=seed)
     wrenches = [e for e in events if isinstance(e, WrenchEvent)]
-    bias_f = -choice.offset[:3]
-    bias_t = -choice.offset[3:]
+    bias_f = np.zeros(3)
+    bias_t = np.zeros(3)
     rest_f = None
     if wrenches:
         t = np.concatenate([e.t for e in wrenches])
@@ -223,7 +241,8 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
             torque = choice.torque_scale * e.torque - bias_t
             if moved:
                 torque = torque + np.cross(d, e.force - rest_f)
-            e = replace(e, force=e.force - bias_f, torque=torque)
+            e = replace(e, force=choice.gain * (e.force - bias_f) + choice.offset[:3],
+                        torque=choice.gain * torque + choice.offset[3:])
         out.append(e)
     return out
 

@@ -193,3 +193,23 @@ def test_offset_settings_are_checked_and_written_to_the_card_only_when_used():
     card = WrenchAugmentation(offset_probability=0.5, contact_offset_m=0.05).to_dict()
     assert card['offset_probability'] == 0.5 and card['contact_offset_m'] == 0.05
     assert card['offset_force_n'] == 10.0 and card['offset_torque_nm'] == 0.5
+
+
+def test_a_gain_multiplies_the_whole_wrench_of_a_trial():
+    events = _placing()
+    aug = WrenchAugmentation(tare_probability=0.0, torque_scale=(1.0, 1.0), gain=(0.2, 1.5))
+    _t0, f0, tq0 = _wrench(events)
+    gains = set()
+    for name in ('a', 'b', 'c'):
+        seed = trial_seed(seed=5, name=name)
+        g = draw(augmentation=aug, seed=seed).gain
+        assert 0.2 <= g <= 1.5
+        _t1, f1, tq1 = _wrench(augment_events(events, augmentation=aug, seed=seed))
+        np.testing.assert_allclose(f1, g * f0)
+        np.testing.assert_allclose(tq1, g * tq0)
+        gains.add(g)
+    assert len(gains) == 3
+    assert 'gain' not in WrenchAugmentation().to_dict()
+    assert aug.to_dict()['gain'] == [0.2, 1.5]
+    with pytest.raises(ConfigError, match='gain'):
+        WrenchAugmentation(gain=(0.0, 1.0))
