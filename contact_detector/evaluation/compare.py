@@ -66,6 +66,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
     """
     manifest = conditions_of(bags)
     names = recording_names(bags)
+    # labelled recordings from several folders are tabled per folder (a day, a robot, a family)
+    several = len({Path(b).parent for b in bags}) > 1
     outcomes: Dict[str, list] = {d: [] for d in detectors}
     recordings: Dict[str, dict] = {d: {} for d in detectors}
     y_true, y_pred = [], []
@@ -102,7 +104,9 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
                 log(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}')
             run = run_detector(events, detector=detector)
             if truth is None:
-                outcomes[name].extend(score_onsets(name=names[bag], condition='labels',
+                outcomes[name].extend(score_onsets(name=names[bag],
+                                                   condition=bag.parent.name if several
+                                                   else 'labels',
                                                    onsets=onsets, events=run.events))
             else:
                 outcomes[name].append(score_trial(truth=truth, releases=run.releases,

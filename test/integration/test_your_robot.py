@@ -124,6 +124,9 @@ def test_bags_that_share_a_name_are_labelled_and_reported_apart(recordings, tmp_
                 json.loads((tmp_path / 'out' / 'trials.json').read_text())['forest']}
     # the same recording, labelled 3 s later on day 2: released before that label
     assert verdicts == {f'day1/{bag}': 'detected', f'day2/{bag}': 'premature'}
+    # ... and the tables by condition have a row per folder
+    summary = (tmp_path / 'out' / 'summary.md').read_text()
+    assert '| day1 | 1 | 1 | 0 | 0 | 0 |' in summary and '| day2 | 1 | 0 | 0 | 0 | 1 (' in summary
     # A CSV that names the bag alone cannot say which day it means: a clear error.
     bare = write_labels(tmp_path / 'bare.csv', {bag: [onset]})
     assert evaluate_cli.main([*days, '--labels', str(bare)]) == 1
