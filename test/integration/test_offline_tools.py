@@ -379,7 +379,8 @@ def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
                           '--model', str(data['model']), '--report', str(report)]) == 0
     rows = json.loads((report / 'trials.json').read_text())['forest']
     onsets = [data['trials']['trial_0000'].onset_t, trials[0].onset_t]
-    assert [r['name'] for r in rows] == ['trial_0000', 'trial_0000']
+    # ... and is named by as much of its path as tells the two apart
+    assert [r['name'] for r in rows] == [f'{data["bags"].name}/trial_0000', 'other/trial_0000']
     assert abs(onsets[0] - onsets[1]) > 0.05
     assert [r['onset_t'] for r in rows] == pytest.approx(onsets, rel=0, abs=1e-6)
 
