@@ -39,6 +39,7 @@ opening each storage, falling back to :mod:`.salvage` message by message, truth 
 manifests); splitting it would put the fallback's bookkeeping in two places.
 """
 
+from collections import Counter
 from contextlib import contextmanager, ExitStack
 import json
 import logging
@@ -178,13 +179,15 @@ def recording_names(bags: Sequence[Path]) -> dict[Path, str]:
 
     """
     parts = {bag: Path(bag).resolve().parts for bag in bags}
-    out = {}
-    for bag, mine in parts.items():
-        k = 1
-        while k < len(mine) and any(other[-k:] == mine[-k:]
-                                    for b, other in parts.items() if b != bag):
-            k += 1
-        out[bag] = '/'.join(mine[-k:])
+    out: dict[Path, str] = {}
+    k = 1
+    while len(out) < len(parts):
+        # how many bags end with each k-part tail: one is a name no other bag shares
+        tails = Counter(mine[-k:] for mine in parts.values())
+        for bag, mine in parts.items():
+            if bag not in out and (tails[mine[-k:]] == 1 or k >= len(mine)):
+                out[bag] = '/'.join(mine[-k:])
+        k += 1
     return out
 
 
