@@ -222,7 +222,8 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     bias_f = np.zeros(3)
     bias_t = np.zeros(3)
     rest_f = None
-    if wrenches:
+    # the rest window is read only when a tare or a contact offset needs it
+    if wrenches and (choice.tared or np.any(choice.contact_offset)):
         t = np.concatenate([e.t for e in wrenches])
         w0, w1 = augmentation.tare_window_s
         first = float(t.min()) if t.size else 0.0

@@ -307,14 +307,14 @@ def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path)
     """
     resolved = {bag: Path(bag).resolve() for bag in bags}
     by_path = {path: bag for bag, path in resolved.items()}
+    folder = Path(csv_path).resolve().parent
     out: Dict[Path, T] = {}
     cell_of: Dict[Path, str] = {}
     for cell, value in rows.items():
         written = Path(cell)
-        places = ([written] if written.is_absolute()
-                  else [Path(csv_path).resolve().parent / written, written.resolve()])
-        hits = list(dict.fromkeys(by_path[p.resolve()] for p in places
-                                  if p.resolve() in by_path))
+        places = ([written.resolve()] if written.is_absolute()
+                  else [(folder / written).resolve(), written.resolve()])
+        hits = list(dict.fromkeys(by_path[p] for p in places if p in by_path))
         if not hits:
             tail = written.parts
             hits = [bag for bag, path in resolved.items() if path.parts[-len(tail):] == tail]
