@@ -189,7 +189,8 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
                              f'{f.offset_probability:g})')
     parser.add_argument('--augment-gain', type=scale_range, default=None, metavar='LOW,HIGH',
                         help='augmentation: the whole wrench times a gain drawn log-uniformly '
-                             f'from LOW,HIGH (default {m.gain[0]:g},{m.gain[1]:g})')
+                             f'from LOW,HIGH (default {m.gain[0]:g},{m.gain[1]:g}; train '
+                             f'--no-audio {f.gain[0]:g},{f.gain[1]:g})')
     parser.add_argument('--augment-contact-offset', type=float, default=None, metavar='M',
                         help='augmentation: every load change acts up to M m away from where '
                              f'it was simulated (default {m.contact_offset_m:g}; train '

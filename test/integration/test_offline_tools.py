@@ -729,9 +729,11 @@ def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, 
     assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '2', '--augment',
                            '--augment-tare', '1', '--out', str(model)]) == 0
     training = load_bundle(path=model).training
-    # the torque range not given is the shipped multimodal model's
+    # the ranges not given are the shipped multimodal model's
     assert training['augmentation'] == {'tare_probability': 1.0, 'tare_window_s': [0.2, 0.6],
-                                        'torque_scale': [0.5, 2.0]}
+                                        'torque_scale': [0.1, 2.0], 'gain': [0.2, 1.5],
+                                        'offset_probability': 0.5, 'offset_force_n': 10.0,
+                                        'offset_torque_nm': 0.5, 'contact_offset_m': 0.05}
     assert data['bundle'].training['augmentation'] is None
     assert train_cli.main([bags, '--augment', '--augment-tare', '1.5',
                            '--out', str(tmp_path / 'bad.npz')]) != 0

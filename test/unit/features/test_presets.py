@@ -20,7 +20,8 @@ from contact_detector.model.storage import load_bundle
 from contact_detector.ros.model_search import node_model_dirs
 from contact_detector.training.augmentation import WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_AUGMENTATION,
+from contact_detector.training.recipe import (DEFAULT_AUGMENTATION, DEFAULT_FEATURES,
+                                              DEFAULT_FT_ONLY_AUGMENTATION,
                                               DEFAULT_FT_ONLY_EXTRA, DEFAULT_FT_ONLY_LABELS,
                                               DEFAULT_LABELS)
 from contact_detector.training.studies import LOFO_SETTINGS
@@ -74,15 +75,16 @@ def test_shipped_models_weigh_the_frames_near_simulated_events_as_chosen() -> No
 def test_shipped_models_trained_on_the_augmented_wrenches_they_were_chosen_with() -> None:
     # docs/decisions/2026-11-24-ft-only-augmentation.md: chosen as sweep --lofo's
     # ft-only+signed+carried+aug with --augment-tare 0.5 --augment-torque 0.333,3
-    # (tools/build_ft_model.sh); the multimodal model with a tare on a quarter of its trials and
-    # lever arms x0.5-2 (docs/decisions/2026-11-24-lever-arm-augmentation.md, candidate D)
+    # (tools/build_ft_model.sh); the multimodal model with candidate L's five augmentations
+    # (docs/decisions/2026-11-25-choosing-on-fresh-generators.md)
     # (train --no-audio --augment's default, DEFAULT_FT_ONLY_AUGMENTATION, and train
-    # --augment's, WrenchAugmentation's own)
+    # --augment's, DEFAULT_AUGMENTATION)
     chosen = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.333, 3.0))
     assert chosen == DEFAULT_FT_ONLY_AUGMENTATION
     assert load_bundle(path=default_ft_model_path()).training['augmentation'] == chosen.to_dict()
-    multimodal = WrenchAugmentation(tare_probability=0.25, torque_scale=(0.5, 2.0))
-    assert multimodal == WrenchAugmentation()
+    multimodal = WrenchAugmentation(tare_probability=0.5, torque_scale=(0.1, 2.0), gain=(0.2, 1.5),
+                                    offset_probability=0.5, contact_offset_m=0.05)
+    assert multimodal == DEFAULT_AUGMENTATION
     assert (load_bundle(path=default_model_path()).training['augmentation']
             == multimodal.to_dict())
 
