@@ -19,7 +19,7 @@ Their defaults are the shipped recipe's (:mod:`contact_detector.training.recipe`
 """
 
 import argparse
-from typing import Optional, TypeVar
+from typing import Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.rule import DecisionRule
@@ -171,40 +171,58 @@ def labels_from_args(args: argparse.Namespace) -> LabelWindow:
                        event_weight=_given(args.event_weight, default=d.event_weight))
 
 
-def add_augmentation_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the wrench-augmentation ranges shared by train and sweep."""
-    m, f = recipe_defaults(ft_only=False).augmentation, recipe_defaults(ft_only=True).augmentation
+def add_augmentation_arguments(parser: argparse.ArgumentParser, *,
+                               defaults: Optional[WrenchAugmentation] = None) -> None:
+    """
+    Add the wrench-augmentation ranges shared by train and sweep.
+
+    ``defaults``: the ranges an option not given takes (sweep's); None, the shipped recipes'
+    (train's: the multimodal model's, or with ``--no-audio`` the F/T-only model's).
+    """
+    if defaults is None:
+        m, f = (recipe_defaults(ft_only=False).augmentation,
+                recipe_defaults(ft_only=True).augmentation)
+
+        def both(mm: str, ft: str) -> str:
+            return f'{mm}; train --no-audio {ft}'
+    else:
+        m = f = defaults
+
+        def both(mm: str, ft: str) -> str:
+            return mm
     parser.add_argument('--augment-tare', type=float, default=None,
-                        help=f'augmentation: probability of a tared sensor (default '
-                             f'{m.tare_probability:g}; train --no-audio {f.tare_probability:g})')
+                        help='augmentation: probability of a tared sensor (default '
+                             f'{both(f"{m.tare_probability:g}", f"{f.tare_probability:g}")})')
     parser.add_argument('--augment-torque', type=scale_range, default=None,
                         help='augmentation: torque scale range LOW,HIGH, log-uniform (default '
-                             f'{m.torque_scale[0]:g},{m.torque_scale[1]:g}; train --no-audio '
-                             f'{f.torque_scale[0]:g},{f.torque_scale[1]:g})')
+                             f'{both(_pair(m.torque_scale), _pair(f.torque_scale))})')
     parser.add_argument('--augment-offset', type=float, default=None,
                         help='augmentation: probability that an untared trial reads with a '
                              f'sensor offset of up to +-{m.offset_force_n:g} N and '
                              f'+-{m.offset_torque_nm:g} N m per axis (default '
-                             f'{m.offset_probability:g}; train --no-audio '
-                             f'{f.offset_probability:g})')
+                             f'{both(f"{m.offset_probability:g}", f"{f.offset_probability:g}")})')
     parser.add_argument('--augment-gain', type=scale_range, default=None, metavar='LOW,HIGH',
                         help='augmentation: the whole wrench times a gain drawn log-uniformly '
-                             f'from LOW,HIGH (default {m.gain[0]:g},{m.gain[1]:g}; train '
-                             f'--no-audio {f.gain[0]:g},{f.gain[1]:g})')
+                             f'from LOW,HIGH (default {both(_pair(m.gain), _pair(f.gain))})')
     parser.add_argument('--augment-contact-offset', type=float, default=None, metavar='M',
                         help='augmentation: every load change acts up to M m away from where '
-                             f'it was simulated (default {m.contact_offset_m:g}; train '
-                             f'--no-audio {f.contact_offset_m:g})')
+                             'it was simulated (default '
+                             f'{both(f"{m.contact_offset_m:g}", f"{f.contact_offset_m:g}")})')
 
 
-def augmentation_from_args(args: argparse.Namespace) -> WrenchAugmentation:
+def _pair(value: Tuple[float, float]) -> str:
+    return f'{value[0]:g},{value[1]:g}'
+
+
+def augmentation_from_args(args: argparse.Namespace, *,
+                           defaults: Optional[WrenchAugmentation] = None) -> WrenchAugmentation:
     """
     Return the augmentation the options name (raises ConfigError on a bad range).
 
-    A range not given takes the shipped recipe's: the F/T-only model's with ``--no-audio``,
-    else the multimodal model's (:func:`recipe_defaults`).
+    A range not given takes ``defaults``'s, or if that is None the shipped recipe's: the F/T-only
+    model's with ``--no-audio``, else the multimodal model's (:func:`recipe_defaults`).
     """
-    d = _defaults(args).augmentation
+    d = defaults if defaults is not None else _defaults(args).augmentation
     return WrenchAugmentation(
         tare_probability=_given(args.augment_tare, default=d.tare_probability),
         torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)),

@@ -64,7 +64,8 @@ from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE, NO_AUDIO_RATE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
-                                               LOFO_SETTINGS, lofo_study, model_study, STATE)
+                                               LOFO_SETTINGS, lofo_study, model_study, STATE,
+                                               STUDY_AUGMENTATION)
 from contact_detector.training.sweep import decode_bags, rows_markdown, seed_rows_markdown
 from tqdm import tqdm
 
@@ -142,7 +143,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
                         help='--lofo: fewest training frames in a leaf of every forest '
                              "(default 1, the paper's fully grown trees)")
-    add_augmentation_arguments(parser)
+    add_augmentation_arguments(parser, defaults=STUDY_AUGMENTATION)
     parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
                         help='--lofo: frames from this long after the onset are labelled '
                              f'contact, s (default {STATE.start_s})')
@@ -194,7 +195,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     if args.lofo:
         try:
-            augmentation = augmentation_from_args(args)
+            augmentation = augmentation_from_args(args, defaults=STUDY_AUGMENTATION)
             check_min_samples_leaf(args.min_samples_leaf)
             label = LabelWindow(args.lofo_label_start, args.lofo_label_end,
                                 args.lofo_label_ignore, args.lofo_event_weight)

@@ -740,6 +740,20 @@ def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, 
     assert 'tare_probability' in capsys.readouterr().err
 
 
+def test_sweep_keeps_its_augmentation_defaults_while_train_takes_the_shipped_ones(capsys):
+    # a sweep command written in the docs before the five augmentations were shipped must keep
+    # its meaning: sweep's ranges not given stay a tare on a quarter, lever arms x0.5-2 and no
+    # gain, offset or contact offset; train --augment's are the shipped model's
+    for main, gain in ((sweep_cli.main, 'default 1,1'), (train_cli.main, 'default 0.2,1.5')):
+        with pytest.raises(SystemExit):
+            main(['--help'])
+        text = ' '.join(capsys.readouterr().out.split())
+        assert f'LOW,HIGH ({gain}' in text
+    assert studies.STUDY_AUGMENTATION.to_dict() == {
+        'tare_probability': 0.25, 'tare_window_s': [0.2, 0.6], 'torque_scale': [0.5, 2.0]}
+    assert recipe.DEFAULT_AUGMENTATION.gain == (0.2, 1.5)
+
+
 def test_train_min_samples_leaf_is_recorded_in_the_card_and_bad_values_are_refused(
         data, tmp_path, capsys):
     model = tmp_path / 'leaf.npz'
