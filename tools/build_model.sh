@@ -4,17 +4,15 @@
 # knock on the hand or the table, a touch, a brush or a set-down: seed 12, --events everywhere
 # --hits mixed, docs/decisions/2026-11-24-events-in-every-family.md), then train with the
 # defaults chosen by leave-one-family-out (docs/generalisation.md; the rule p >= 0.95 or a
-# 15-frame mean >= 0.4) and augmented training wrenches, in every family: a tared sensor on a
-# quarter of the trials (--augment-tare 0.25, docs/decisions/2026-11-24-tared-sensors-
-# everywhere.md) and lever arms x0.5-2 (--augment-torque 0.5,2,
-# docs/decisions/2026-11-24-lever-arm-augmentation.md), with the no-contact frames from 20 ms
-# before to 0.8 s after the start of a simulated knock, touch, brush or set-down weighing 3
-# in training (--event-weight 3, docs/decisions/2026-11-25-weight-exogenous-event-frames.md).
-# The wrench augmentations were widened, chosen on fresh trials of two generators written apart
-# from the simulator and on the leave-one-family-out table by the worst family
-# (docs/decisions/2026-11-25-choosing-on-fresh-generators.md): a tared sensor on half of the
-# trials, lever arms x0.1-2, the whole wrench x0.2-1.5, an untared offset on half, and every
-# load change up to 5 cm off the centre of mass.
+# 15-frame mean >= 0.4), with the no-contact frames from 20 ms before to 0.8 s after the start
+# of a simulated knock, touch, brush or set-down weighing 3 in training (--event-weight 3,
+# docs/decisions/2026-11-25-weight-exogenous-event-frames.md), and augmented training wrenches
+# in every family: a tared sensor on half the trials, an untared offset on half, lever arms
+# x0.1-2, the whole wrench x0.2-1.5 and every load change up to 5 cm off the centre of mass,
+# chosen by the worst family over fresh trials of two generators written apart from the
+# simulator and the leave-one-family-out table
+# (docs/decisions/2026-11-25-choosing-on-fresh-generators.md; train --augment's defaults,
+# spelled out here).
 # Usage: tools/build_model.sh [TRAIN_DIR [EXTRA_DIR]] (default data/train, data/train_extra).
 # Writes models/contact_forest.npz (loads with numpy alone), its card and report.
 set -euo pipefail
