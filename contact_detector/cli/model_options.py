@@ -19,7 +19,7 @@ Their defaults are the shipped recipe's (:mod:`contact_detector.training.recipe`
 """
 
 import argparse
-from typing import Optional, Tuple, TypeVar
+from typing import Callable, Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
 from contact_detector.model.rule import DecisionRule
@@ -179,35 +179,30 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser, *,
     ``defaults``: the ranges an option not given takes (sweep's); None, the shipped recipes'
     (train's: the multimodal model's, or with ``--no-audio`` the F/T-only model's).
     """
-    if defaults is None:
-        m, f = (recipe_defaults(ft_only=False).augmentation,
-                recipe_defaults(ft_only=True).augmentation)
+    # with given defaults (sweep's) one value per option; else train's two recipes'
+    m = defaults if defaults is not None else recipe_defaults(ft_only=False).augmentation
+    f = None if defaults is not None else recipe_defaults(ft_only=True).augmentation
 
-        def both(mm: str, ft: str) -> str:
-            return f'{mm}; train --no-audio {ft}'
-    else:
-        m = f = defaults
-
-        def both(mm: str, ft: str) -> str:
-            return mm
+    def default(show: Callable[[WrenchAugmentation], str]) -> str:
+        return show(m) if f is None else f'{show(m)}; train --no-audio {show(f)}'
     parser.add_argument('--augment-tare', type=float, default=None,
                         help='augmentation: probability of a tared sensor (default '
-                             f'{both(f"{m.tare_probability:g}", f"{f.tare_probability:g}")})')
+                             f'{default(lambda a: f"{a.tare_probability:g}")})')
     parser.add_argument('--augment-torque', type=scale_range, default=None,
                         help='augmentation: torque scale range LOW,HIGH, log-uniform (default '
-                             f'{both(_pair(m.torque_scale), _pair(f.torque_scale))})')
+                             f'{default(lambda a: _pair(a.torque_scale))})')
     parser.add_argument('--augment-offset', type=float, default=None,
                         help='augmentation: probability that an untared trial reads with a '
                              f'sensor offset of up to +-{m.offset_force_n:g} N and '
                              f'+-{m.offset_torque_nm:g} N m per axis (default '
-                             f'{both(f"{m.offset_probability:g}", f"{f.offset_probability:g}")})')
+                             f'{default(lambda a: f"{a.offset_probability:g}")})')
     parser.add_argument('--augment-gain', type=scale_range, default=None, metavar='LOW,HIGH',
                         help='augmentation: the whole wrench times a gain drawn log-uniformly '
-                             f'from LOW,HIGH (default {both(_pair(m.gain), _pair(f.gain))})')
+                             f'from LOW,HIGH (default {default(lambda a: _pair(a.gain))})')
     parser.add_argument('--augment-contact-offset', type=float, default=None, metavar='M',
                         help='augmentation: every load change acts up to M m away from where '
                              'it was simulated (default '
-                             f'{both(f"{m.contact_offset_m:g}", f"{f.contact_offset_m:g}")})')
+                             f'{default(lambda a: f"{a.contact_offset_m:g}")})')
 
 
 def _pair(value: Tuple[float, float]) -> str:
