@@ -203,6 +203,11 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser, *,
                         help='augmentation: every load change acts up to M m away from where '
                              'it was simulated (default '
                              f'{default(lambda a: f"{a.contact_offset_m:g}")})')
+    parser.add_argument('--augment-lag', type=scale_range, default=None, metavar='LOW,HIGH',
+                        help='augmentation: the whole wrench through a first-order lag whose '
+                             'time constant (s) is drawn log-uniformly from LOW,HIGH: a softer '
+                             'wrist or surface (default '
+                             f'{default(lambda a: _pair(a.lag_s) if any(a.lag_s) else "none")})')
 
 
 def _pair(value: Tuple[float, float]) -> str:
@@ -223,7 +228,8 @@ def augmentation_from_args(args: argparse.Namespace, *,
         torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)),
         offset_probability=_given(args.augment_offset, default=d.offset_probability),
         contact_offset_m=_given(args.augment_contact_offset, default=d.contact_offset_m),
-        gain=tuple(_given(args.augment_gain, default=d.gain)))
+        gain=tuple(_given(args.augment_gain, default=d.gain)),
+        lag_s=tuple(_given(args.augment_lag, default=d.lag_s)))
 
 
 def _defaults(args: argparse.Namespace) -> RecipeDefaults:

@@ -86,6 +86,9 @@ class WrenchAugmentation:
         Radius of the ball the contact offset ``d`` is drawn from, m (>= 0; 0: none).
     gain : tuple of float
         (low, high) of the log-uniform gain ``g`` on the whole wrench, ``0 < low <= high``.
+    lag_s : tuple of float
+        (low, high) of the log-uniform time constant ``tau`` of the wrench lag, s:
+        ``0 < low <= high``, or ``(0, 0)`` for none.
 
     """
 
@@ -100,6 +103,7 @@ class WrenchAugmentation:
     offset_torque_nm: float = 0.5
     contact_offset_m: float = 0.0
     gain: Tuple[float, float] = (1.0, 1.0)
+    lag_s: Tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         """Validate the ranges (raises ConfigError)."""
@@ -111,6 +115,7 @@ class WrenchAugmentation:
             sizes = (float(self.offset_force_n), float(self.offset_torque_nm),
                      float(self.contact_offset_m))
             g_lo, g_hi = (float(v) for v in self.gain)
+            l_lo, l_hi = (float(v) for v in self.lag_s)
         except (TypeError, ValueError) as err:
             raise ConfigError(f'WrenchAugmentation: not numbers: {self}') from err
         if not 0.0 <= p <= 1.0:
@@ -125,6 +130,9 @@ class WrenchAugmentation:
             raise ConfigError(f'offset sizes must be finite and >= 0, got {sizes}')
         if not 0.0 < g_lo <= g_hi or not math.isfinite(g_hi):
             raise ConfigError(f'gain must be 0 < low <= high, got {self.gain}')
+        if (l_lo, l_hi) != (0.0, 0.0) and (not 0.0 < l_lo <= l_hi or not math.isfinite(l_hi)):
+            raise ConfigError(f'lag_s must be 0 < low <= high (or 0,0 for none), got '
+                              f'{self.lag_s}')
 
     def to_dict(self) -> dict:
         """Return the settings as a JSON-ready dict (for the model card)."""
@@ -139,18 +147,21 @@ class WrenchAugmentation:
             out['contact_offset_m'] = self.contact_offset_m
         if tuple(self.gain) != (1.0, 1.0):
             out['gain'] = list(self.gain)
+        if tuple(self.lag_s) != (0.0, 0.0):
+            out['lag_s'] = list(self.lag_s)
         return out
 
 
 @dataclass(frozen=True)
 class WrenchDraw:
-    """One trial's draw: the torque scale, a tare, the sensor offset and the contact offset."""
+    """One trial's draw: torque scale, tare, sensor offset, contact offset, gain and lag (s)."""
 
     torque_scale: float
     tared: bool
     offset: np.ndarray = field(default_factory=lambda: np.zeros(6))
     contact_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
     gain: float = 1.0
+    lag_s: float = 0.0
 
 
 def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw:
@@ -169,7 +180,8 @@ def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw
     WrenchDraw
         ``s = exp(U(log low, log high))``, ``tared ~ Bernoulli(tare_probability)``; untared,
         the offset with probability ``offset_probability``; ``d`` uniform in the ball;
-        ``g = exp(U(log low, log high))`` of ``gain``.
+        ``g = exp(U(log low, log high))`` of ``gain``; ``tau`` likewise of ``lag_s`` (0 when
+        ``lag_s`` is ``(0, 0)``).
 
     """
     rng = np.random.default_rng(list(seed))
@@ -186,8 +198,10 @@ def draw(*, augmentation: WrenchAugmentation, seed: Sequence[int]) -> WrenchDraw
     contact = direction / max(float(np.linalg.norm(direction)), 1e-12) * radius
     g_lo, g_hi = augmentation.gain
     gain = float(np.exp(rng.uniform(np.log(g_lo), np.log(g_hi))))
+    l_lo, l_hi = augmentation.lag_s
+    lag = float(np.exp(rng.uniform(np.log(l_lo), np.log(l_hi)))) if l_hi > 0 else 0.0
     return WrenchDraw(torque_scale=scale, tared=tared, offset=offset, contact_offset=contact,
-                      gain=gain)
+                      gain=gain, lag_s=lag)
 
 
 def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
@@ -198,8 +212,9 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
     ``F' = g (F - tared * mean_w(F)) + b_F`` and ``T' = g (s T + d x (F - mean_w(F)) - tared
     * mean_w(s T)) + b_T``, where ``mean_w`` is the mean over the samples stamped in the tare
     window (``tare_window_s`` after the first wrench stamp), and ``g``, ``b`` and ``d`` are the
-    gain, the sensor offset and the contact offset of the draw. If the recording has no sample
-    in that window, the tare and the contact offset are skipped (the scale, the gain and the
+    gain, the sensor offset and the contact offset of the draw. With a lag ``tau`` of the draw,
+    ``F`` and ``T`` are first the lagged wrench (:func:`lag_wrench`). If the recording has no
+    sample in that window, the tare and the contact offset are skipped (the scale, the gain and the
     offset still apply).
 
     Parameters
@@ -218,6 +233,8 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
 
     """
     choice = draw(augmentation=augmentation, seed=seed)
+    if choice.lag_s > 0:
+        events = lag_wrench(events, tau_s=choice.lag_s)
     wrenches = [e for e in events if isinstance(e, WrenchEvent)]
     bias_f = np.zeros(3)
     bias_t = np.zeros(3)
@@ -244,6 +261,52 @@ def augment_events(events: Sequence[Event], *, augmentation: WrenchAugmentation,
                 torque = torque + np.cross(d, e.force - rest_f)
             e = replace(e, force=choice.gain * (e.force - bias_f) + choice.offset[:3],
                         torque=choice.gain * torque + choice.offset[3:])
+        out.append(e)
+    return out
+
+
+def lag_wrench(events: Sequence[Event], *, tau_s: float) -> List[Event]:
+    """
+    Return the events with the wrench through a first-order lag.
+
+    Over the wrench samples in stamp order, ``y_0 = x_0`` and ``y_i = y_{i-1} + (1 -
+    exp(-(t_i - t_{i-1}) / tau_s)) (x_i - y_{i-1})``, per axis of the force (N) and the torque
+    (N m); a gap in the stamps lets the output move that much further. A constant wrench is
+    unchanged.
+
+    Parameters
+    ----------
+    events : sequence of Event
+        One recording's events.
+    tau_s : float
+        Time constant, s (> 0).
+
+    Returns
+    -------
+    list of Event
+        The same events, wrench events replaced; shapes and stamps unchanged.
+
+    """
+    wrenches = [e for e in events if isinstance(e, WrenchEvent)]
+    if not wrenches:
+        return list(events)
+    t = np.concatenate([e.t for e in wrenches])
+    x = np.concatenate([np.hstack([e.force, e.torque]) for e in wrenches])
+    order = np.argsort(t, kind='stable')
+    keep = np.exp(-np.maximum(np.diff(t[order], prepend=t[order[0]]), 0.0) / tau_s)
+    y = np.empty_like(x)
+    state = x[order[0]].copy()
+    # a recursion: each output needs the previous one (at most a few 10^4 samples per trial)
+    for i, a in zip(order, keep):
+        state = a * state + (1.0 - a) * x[i]
+        y[i] = state
+    out: List[Event] = []
+    start = 0
+    for e in events:
+        if isinstance(e, WrenchEvent):
+            n = e.t.shape[0]
+            e = replace(e, force=y[start:start + n, :3], torque=y[start:start + n, 3:])
+            start += n
         out.append(e)
     return out
 

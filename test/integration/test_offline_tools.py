@@ -738,6 +738,13 @@ def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, 
     assert train_cli.main([bags, '--augment', '--augment-tare', '1.5',
                            '--out', str(tmp_path / 'bad.npz')]) != 0
     assert 'tare_probability' in capsys.readouterr().err
+    # the lag is off unless asked for, and a range that starts at 0 is refused
+    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '2', '--augment',
+                           '--augment-lag', '0.02,0.2', '--out', str(model)]) == 0
+    assert load_bundle(path=model).training['augmentation']['lag_s'] == [0.02, 0.2]
+    assert train_cli.main([bags, '--augment', '--augment-lag', '0,0.2',
+                           '--out', str(tmp_path / 'bad.npz')]) != 0
+    assert 'lag_s' in capsys.readouterr().err
 
 
 def test_sweep_keeps_its_augmentation_defaults_while_train_takes_the_shipped_ones(capsys):

@@ -16,8 +16,8 @@
 
 from contact_detector.errors import ConfigError
 from contact_detector.io.sensor_stream import AudioEvent, TruthEvent, WrenchEvent
-from contact_detector.training.augmentation import (augment_events, draw, trial_seed,
-                                                    WrenchAugmentation)
+from contact_detector.training.augmentation import (augment_events, draw, lag_wrench,
+                                                    trial_seed, WrenchAugmentation)
 from contact_detector.training.recipe import DEFAULT_FEATURES
 from contact_detector.training.sweep import trial_frames
 import numpy as np
@@ -213,3 +213,43 @@ def test_a_gain_multiplies_the_whole_wrench_of_a_trial():
     assert aug.to_dict()['gain'] == [0.2, 1.5]
     with pytest.raises(ConfigError, match='gain'):
         WrenchAugmentation(gain=(0.0, 1.0))
+
+
+def test_a_lag_stretches_the_load_transfer_and_leaves_the_carried_load():
+    events = _placing(seconds=6.0)
+    t, f0, _tq0 = _wrench(events)
+    aug = WrenchAugmentation(tare_probability=0.0, torque_scale=(1.0, 1.0), lag_s=(0.05, 0.3))
+    seed = trial_seed(seed=2, name='a')
+    tau = draw(augmentation=aug, seed=seed).lag_s
+    assert 0.05 <= tau <= 0.3
+    _t1, f1, tq1 = _wrench(augment_events(events, augmentation=aug, seed=seed))
+    load = np.linalg.norm(f0, axis=1)
+    lagged = np.linalg.norm(f1, axis=1)
+    holding = t < 2.4
+    np.testing.assert_allclose(lagged[holding].mean(), load[holding].mean(), rtol=1e-3)
+    # The raw transfer (8 N -> 4 N in 15 ms) is done 50 ms after the onset; lagged, a step
+    # arrives as 1 - exp(-t / tau): at one tau after the transfer, 63 % of it.
+    done = np.abs(t - (2.5 + 0.015 + tau)) <= 0.5 / RATE
+    moved = (load[holding].mean() - lagged[done].mean()) / 4.0
+    assert 0.55 < moved < 0.72
+    late = t > 2.5 + 0.015 + 8 * 0.3
+    np.testing.assert_allclose(lagged[late].mean(), load[late].mean(), atol=0.05)
+    # One filter for force and torque, so the torque lags the same way.
+    np.testing.assert_allclose(tq1, np.cross(LEVER, f1), atol=0.01)
+    assert aug.to_dict()['lag_s'] == [0.05, 0.3]
+    assert 'lag_s' not in WrenchAugmentation().to_dict()
+    assert draw(augmentation=WrenchAugmentation(), seed=seed).lag_s == 0.0
+    with pytest.raises(ConfigError, match='lag_s'):
+        WrenchAugmentation(lag_s=(0.0, 0.3))
+
+
+def test_a_lag_follows_the_stamps_across_a_gap():
+    w = [WrenchEvent(t=np.array([0.0, 0.01, 0.02]), force=np.zeros((3, 3)),
+                     torque=np.zeros((3, 3)), now=0.02),
+         WrenchEvent(t=np.array([1.02]), force=np.ones((1, 3)), torque=np.ones((1, 3)),
+                     now=1.02)]
+    out = lag_wrench(w, tau_s=0.1)
+    # 1 s without a sample is ten time constants: the output has all but caught up.
+    np.testing.assert_allclose(out[1].force, 1.0 - np.exp(-10.0), rtol=1e-12)
+    np.testing.assert_array_equal(out[0].force, 0.0)
+    assert [e.t.tolist() for e in out] == [e.t.tolist() for e in w]
