@@ -78,6 +78,7 @@ LOFO_SETTINGS = {
     # the carried-load features of the multimodal model: a knock on the hand does not take
     # the carried load off, a table does
     'ft-only+signed+carried': _SPECTRAL + _SHIFT + _SIGNED + CARRIED_FEATURES,
+    'ft-only+signed+carried+hold': _SPECTRAL + _SHIFT + _SIGNED + CARRIED_FEATURES + _HOLD,
     'ft-only+signed+max20': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+max30': _SPECTRAL + _SHIFT + _SIGNED,
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
