@@ -18,7 +18,8 @@ Which trials a left-out family loses, by one of the simulator's parameters.
     .venv/bin/python benchmarks/lofo_by_param.py DIR... --family geometry --param tared
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1] [--trials]
         [--setting shipped+aug --augment-tare P --augment-torque LOW,HIGH
-         [--augment-cache aug.pkl]] [--event-weight W]
+         [--augment-gain LOW,HIGH] [--augment-offset P] [--augment-contact-offset M]
+         [--augment-lag LOW,HIGH] [--augment-cache aug.pkl]] [--event-weight W]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -27,11 +28,12 @@ Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10
 ``params``; numbers are cut at their quartiles), the left-out trials caught within 500 ms,
 early and not caught, over the forests of ``--seeds``. ``--trials`` also prints every trial.
 ``--cache`` keeps the computed frames for the next run on the same folders. A setting named
-``NAME+aug`` trains the forests on the other families' wrenches augmented by ``--augment-tare``
-and ``--augment-torque``, as ``sweep --lofo --lofo-settings NAME+aug`` does (the shipped
-protocol: ``--setting shipped+aug --augment-tare 0.25 --augment-torque 0.5,2 --event-weight
-3``); the left-out family is never augmented. ``--augment-cache`` keeps those frames.
-``--event-weight W`` weighs the training frames near a simulated event as ``sweep
+``NAME+aug`` trains the forests on the other families' wrenches augmented by the
+``--augment-*`` options, as ``sweep --lofo --lofo-settings NAME+aug`` does with the same ones,
+and with sweep's defaults (the shipped protocol: ``--setting shipped+aug --augment-tare 0.5
+--augment-torque 0.1,2 --augment-gain 0.2,1.5 --augment-offset 0.5 --augment-contact-offset
+0.05 --event-weight 3``); the left-out family is never augmented. ``--augment-cache`` keeps
+those frames. ``--event-weight W`` weighs the training frames near a simulated event as ``sweep
 --lofo-event-weight W`` does (default 1).
 """
 

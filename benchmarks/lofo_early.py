@@ -18,7 +18,8 @@ Why a left-out family releases early: the events, P(contact) and features before
     .venv/bin/python benchmarks/lofo_early.py DIR... --family exogenous
         [--setting shipped] [--seeds 0,1,2] [--cache frames.pkl] [--jobs 1]
         [--setting shipped+aug --augment-tare P --augment-torque LOW,HIGH
-         [--augment-cache aug.pkl]] [--event-weight W]
+         [--augment-gain LOW,HIGH] [--augment-offset P] [--augment-contact-offset M]
+         [--augment-lag LOW,HIGH] [--augment-cache aug.pkl]] [--event-weight W]
 
 Trains the leave-one-family-out forests of ``contact-detector sweep --lofo`` (10 trees, labels
 0-0.3 s, the setting's columns of the full feature configuration) on every family but
@@ -36,7 +37,8 @@ Then the same feature values for the caught trials at their release frame, as a 
 ``--cache`` keeps the computed frames (a pickle, with their feature configuration: a cache
 written with another one is recomputed) for the next run on the same folders. The protocol
 options are ``lofo_by_param.py``'s (the shipped protocol: ``--setting shipped+aug
---augment-tare 0.25 --augment-torque 0.5,2 --event-weight 3``); the percentiles are among the
+--augment-tare 0.5 --augment-torque 0.1,2 --augment-gain 0.2,1.5 --augment-offset 0.5
+--augment-contact-offset 0.05 --event-weight 3``); the percentiles are among the
 frames the forests trained on (augmented, for ``NAME+aug``).
 """
 

@@ -53,16 +53,25 @@ def add_protocol_arguments(parser: argparse.ArgumentParser) -> None:
     Add the training protocol's options, as ``sweep --lofo`` names them.
 
     ``--setting`` (a ``sweep --lofo`` setting, ``NAME+aug`` for augmented training wrenches),
-    ``--augment-tare``, ``--augment-torque`` and ``--augment-cache`` (the augmented frames'
-    cache), ``--event-weight``; the options of train and sweep (cli/model_options.py, which a
-    benchmark does not import), with WrenchAugmentation's defaults and its validation.
+    ``--augment-tare``, ``--augment-torque``, ``--augment-gain``, ``--augment-offset``,
+    ``--augment-contact-offset``, ``--augment-lag`` and ``--augment-cache`` (the augmented
+    frames' cache), ``--event-weight``; the options of train and sweep (cli/model_options.py,
+    which a benchmark does not import), with WrenchAugmentation's defaults (sweep's) and its
+    validation. The shipped multimodal protocol needs all five of train's: ``--augment-tare 0.5
+    --augment-torque 0.1,2 --augment-gain 0.2,1.5 --augment-offset 0.5
+    --augment-contact-offset 0.05``.
     """
     parser.add_argument('--setting', default='shipped',
                         choices=sorted([*LOFO_SETTINGS, *(s + AUGMENTED for s in LOFO_SETTINGS)]))
     parser.add_argument('--augment-tare', type=float,
                         default=WrenchAugmentation.tare_probability)
-    parser.add_argument('--augment-torque', default=','.join(
-        f'{v:g}' for v in WrenchAugmentation.torque_scale))
+    parser.add_argument('--augment-torque', default=_pair(WrenchAugmentation.torque_scale))
+    parser.add_argument('--augment-gain', default=_pair(WrenchAugmentation.gain))
+    parser.add_argument('--augment-offset', type=float,
+                        default=WrenchAugmentation.offset_probability)
+    parser.add_argument('--augment-contact-offset', type=float,
+                        default=WrenchAugmentation.contact_offset_m)
+    parser.add_argument('--augment-lag', default=_pair(WrenchAugmentation.lag_s))
     parser.add_argument('--augment-cache', type=Path, default=None)
     parser.add_argument('--event-weight', type=float, default=1.0,
                         help='weight of the training frames near a simulated event (sweep '
@@ -86,8 +95,9 @@ def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str,
     fit_frames = frames
     if augmented:
         augmentation = WrenchAugmentation(
-            tare_probability=args.augment_tare,
-            torque_scale=tuple(float(v) for v in args.augment_torque.split(',')))
+            tare_probability=args.augment_tare, torque_scale=_range(args.augment_torque),
+            gain=_range(args.augment_gain), offset_probability=args.augment_offset,
+            contact_offset_m=args.augment_contact_offset, lag_s=_range(args.augment_lag))
         fit_frames = load_frames(folders=args.folders, config=setting.config,
                                  cache=args.augment_cache, jobs=args.jobs,
                                  augmentation=augmentation)
@@ -95,6 +105,15 @@ def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str,
     if args.event_weight != 1:
         text += f', event weight {args.event_weight:g}'
     return setting, frames, fit_frames, text
+
+
+def _pair(value: Tuple[float, float]) -> str:
+    return ','.join(f'{v:g}' for v in value)
+
+
+def _range(text: str) -> Tuple[float, float]:
+    low, high = (float(v) for v in text.split(','))
+    return low, high
 
 
 def rule_from(args: argparse.Namespace) -> DecisionRule:
