@@ -32,7 +32,8 @@ from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule
-from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
+from contact_detector.training.augmentation import (AUGMENTED, scale_range,
+                                                    WrenchAugmentation)
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import FeatureSetting, lofo_setting, LOFO_SETTINGS
@@ -65,13 +66,15 @@ def add_protocol_arguments(parser: argparse.ArgumentParser) -> None:
                         choices=sorted([*LOFO_SETTINGS, *(s + AUGMENTED for s in LOFO_SETTINGS)]))
     parser.add_argument('--augment-tare', type=float,
                         default=WrenchAugmentation.tare_probability)
-    parser.add_argument('--augment-torque', default=_pair(WrenchAugmentation.torque_scale))
-    parser.add_argument('--augment-gain', default=_pair(WrenchAugmentation.gain))
+    # LOW,HIGH parsed as train and sweep parse it; argparse leaves a tuple default as it is
+    parser.add_argument('--augment-torque', type=scale_range,
+                        default=WrenchAugmentation.torque_scale)
+    parser.add_argument('--augment-gain', type=scale_range, default=WrenchAugmentation.gain)
     parser.add_argument('--augment-offset', type=float,
                         default=WrenchAugmentation.offset_probability)
     parser.add_argument('--augment-contact-offset', type=float,
                         default=WrenchAugmentation.contact_offset_m)
-    parser.add_argument('--augment-lag', default=_pair(WrenchAugmentation.lag_s))
+    parser.add_argument('--augment-lag', type=scale_range, default=WrenchAugmentation.lag_s)
     parser.add_argument('--augment-cache', type=Path, default=None)
     parser.add_argument('--event-weight', type=float, default=1.0,
                         help='weight of the training frames near a simulated event (sweep '
@@ -95,9 +98,9 @@ def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str,
     fit_frames = frames
     if augmented:
         augmentation = WrenchAugmentation(
-            tare_probability=args.augment_tare, torque_scale=_range(args.augment_torque),
-            gain=_range(args.augment_gain), offset_probability=args.augment_offset,
-            contact_offset_m=args.augment_contact_offset, lag_s=_range(args.augment_lag))
+            tare_probability=args.augment_tare, torque_scale=args.augment_torque,
+            gain=args.augment_gain, offset_probability=args.augment_offset,
+            contact_offset_m=args.augment_contact_offset, lag_s=args.augment_lag)
         fit_frames = load_frames(folders=args.folders, config=setting.config,
                                  cache=args.augment_cache, jobs=args.jobs,
                                  augmentation=augmentation)
@@ -105,15 +108,6 @@ def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str,
     if args.event_weight != 1:
         text += f', event weight {args.event_weight:g}'
     return setting, frames, fit_frames, text
-
-
-def _pair(value: Tuple[float, float]) -> str:
-    return ','.join(f'{v:g}' for v in value)
-
-
-def _range(text: str) -> Tuple[float, float]:
-    low, high = (float(v) for v in text.split(','))
-    return low, high
 
 
 def rule_from(args: argparse.Namespace) -> DecisionRule:
