@@ -258,14 +258,25 @@ def _trial_names(*, bags: Sequence[Path], user: set) -> list:
 
     Simulated trials (``--with-sim``) get ``sim/``. A name that two bags would share (a
     recording and a simulated trial, or two folders of trials that both start at
-    ``trial_0000``, as ``tools/build_model.sh`` trains) is prefixed with the bag's folder, so
-    the card names each test trial once and the events on the test trials are scored on
-    test trials only.
+    ``trial_0000``, as ``tools/build_model.sh`` trains) is prefixed with the bag's folders, as
+    many as it takes (``seed1/rigid/trial_0000`` beside ``seed2/rigid/trial_0000``), so the
+    card names each test trial once and the events on the test trials are scored on test
+    trials only.
     """
-    base = [b.name if b in user else f'sim/{b.name}' for b in bags]
-    shared = {n for n, count in Counter(base).items() if count > 1}
-    return [(f'{b.parent.name}/{b.name}' if b in user else f'sim/{b.parent.name}/{b.name}')
-            if n in shared else n for b, n in zip(bags, base)]
+    depth = [1] * len(bags)
+
+    def name(i: int) -> str:
+        bag = bags[i]
+        return ('' if bag in user else 'sim/') + '/'.join(bag.parts[-depth[i]:])
+
+    while True:
+        names = [name(i) for i in range(len(bags))]
+        shared = {n for n, count in Counter(names).items() if count > 1}
+        grow = [i for i, n in enumerate(names) if n in shared and depth[i] < len(bags[i].parts)]
+        if not grow:
+            return names
+        for i in grow:
+            depth[i] += 1
 
 
 def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],

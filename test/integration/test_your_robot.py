@@ -276,9 +276,11 @@ def test_labels_from_a_topic_and_a_recording_cut_per_contact(recordings, tmp_pat
         f'{stem}_c2.bag,{onset:.6f},{onset:.6f}']
 
 
-def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys):
-    # tools/build_model.sh trains on two folders that both start at trial_0000
-    folders = [tmp_path / 'train', tmp_path / 'train_extra']
+@pytest.mark.parametrize('layout', [('train', 'train_extra'), ('day1/rigid', 'day2/rigid')])
+def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys, layout):
+    # tools/build_model.sh trains on two folders that both start at trial_0000; two days of
+    # recordings may even share the folder's name
+    folders = [tmp_path / name for name in layout]
     for seed, folder in enumerate(folders):
         assert simulate_cli.main([str(folder), '--trials', '5', '--seed', str(20 + seed),
                                   '--conditions', 'paper', '--quiet']) == 0
@@ -287,10 +289,10 @@ def test_two_folders_whose_trials_share_names_are_told_apart(tmp_path, capsys):
                            '--out', str(model)]) == 0
     printed = capsys.readouterr().out
     test_trials = load_bundle(path=model).training['test_trials']
-    bags = [f'{folder.name}/{bag.name}' for folder in folders for bag in folder.iterdir()
+    bags = [f'{name}/{bag.name}' for name in layout for bag in (tmp_path / name).iterdir()
             if bag.name.startswith('trial_')]
     # each name in the card is one bag: with both folders' trial_0000 ... the bare name is
-    # shared, so the folder is part of it
+    # shared, so the folder (and, where the folders share a name, its parent) is part of it
     assert test_trials and set(test_trials) <= set(bags)
     scored = json.loads(printed.split('events on test trials:', 1)[1].splitlines()[0])
     assert scored['trials'] == len(test_trials)
