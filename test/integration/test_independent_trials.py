@@ -22,8 +22,11 @@ import subprocess
 import sys
 
 from contact_detector.cli import evaluate as evaluate_cli
+from contact_detector.cli import simulate as simulate_cli
+from contact_detector.cli import train as train_cli
 from contact_detector.io.bags import read_wrench
 from contact_detector.io.discovery import discover_streams
+from contact_detector.model.storage import load_bundle
 import pytest
 
 pytestmark = pytest.mark.slow   # runs the generator's 8 kHz mechanics
@@ -65,3 +68,33 @@ def test_trials_are_labelled_bags_that_evaluate_reads(script, tmp_path, capsys):
     printed = capsys.readouterr().out
     for row in rows:
         assert f'| {Path(row["bag"]).name} | 1 |' in printed or f'| {row["bag"]} | 1 |' in printed
+
+
+def test_a_generator_and_simulated_trials_train_together_from_one_labels_csv(tmp_path):
+    # benchmarks/training_set_labels.py: the decision notes' training on a second world
+    sim, gen = tmp_path / 'sim', tmp_path / 'gen'
+    assert simulate_cli.main([str(sim), '--trials', '3', '--seed', '5', '--conditions', 'paper',
+                              '--quiet']) == 0
+    subprocess.run([sys.executable, BENCHMARKS / 'independent_trials.py', gen,
+                    '--trials-per-family', '2', '--seed', '7', '--families', 'disturbed',
+                    '--jobs', '1'], check=True, capture_output=True)
+    labels = tmp_path / 'csv' / 'all.csv'
+    done = subprocess.run([sys.executable, BENCHMARKS / 'training_set_labels.py', labels, sim,
+                           gen, '--events'], check=True, capture_output=True, text=True)
+    folders = done.stdout.split()
+    assert folders == [str(sim), str(gen / 'disturbed')]
+    with open(labels) as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 5 and all(not Path(r['bag']).is_absolute() for r in rows)
+    # the generator's events are in the family folder's manifest, at their bag times
+    trials = json.loads((gen / 'trials.json').read_text())['trials']
+    manifest = json.loads((gen / 'disturbed' / 'manifest.json').read_text())['trials']
+    assert [[i['t'] for i in m['impacts']] for m in manifest] == [
+        [e['t_abs'] for e in t['events']] for t in trials]
+    assert any(m['impacts'] for m in manifest)
+    model = tmp_path / 'm.npz'
+    assert train_cli.main([*folders, '--labels', str(labels), '--trees', '2', '--jobs', '1',
+                           '--no-events', '--event-weight', '3', '--out', str(model)]) == 0
+    training = load_bundle(path=model).training
+    assert training['sources']['recordings']['count'] == 5
+    assert sum(training['exogenous_events'].values()) >= sum(len(m['impacts']) for m in manifest)
