@@ -33,6 +33,8 @@ object, which makes no sound, from a table, which does; the cost falls on quiet 
 
 Per gate, it prints trials caught within 500 ms, early releases and the median latency, the
 worst family by ``(caught - early) / trials``, and each family's caught / early / median.
+Then how loud the contacts are: the largest ``audio_rise_db`` from 50 ms before the onset to
+300 ms after it, its median and how often it stays below 6 dB.
 """
 
 import argparse
@@ -114,6 +116,20 @@ def table(trials: List[dict]) -> None:
                           for fam, v in sorted(fams.items())), flush=True)
 
 
+def loudness(trials: List[dict]) -> None:
+    """Print how loud the contacts are: the largest rise from 50 ms before to 300 ms after."""
+    peaks: Dict[str, list] = {}
+    for tr in trials:
+        near = (tr['t'] > tr['onset'] - 0.05) & (tr['t'] < tr['onset'] + 0.3)
+        peaks.setdefault(tr['family'], []).append(
+            float(tr['rise'][near].max()) if near.any() else float('nan'))
+    every = np.array([v for values in peaks.values() for v in values])
+    print(f'largest {FEATURE} from -50 to +300 ms around the onset: median '
+          f'{np.nanmedian(every):.1f} dB, below 6 dB in {np.mean(every < 6):.0%} of trials | '
+          + ', '.join(f'{fam} {np.nanmedian(v):.1f} dB, {np.mean(np.array(v) < 6):.0%}'
+                      for fam, v in sorted(peaks.items())))
+
+
 def lofo_trials(args: argparse.Namespace) -> List[dict]:
     """Return, every family left out in turn, the shipped rule's contact frames and the rise."""
     setting, frames, fit_frames, _ = protocol_frames(args)
@@ -175,7 +191,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     bags.add_argument('--labels', type=Path, required=True)
     bags.add_argument('--model', type=Path, default=None)
     args = parser.parse_args(argv)
-    table(lofo_trials(args) if args.mode == 'lofo' else bag_trials(args))
+    trials = lofo_trials(args) if args.mode == 'lofo' else bag_trials(args)
+    table(trials)
+    loudness(trials)
     return 0
 
 
