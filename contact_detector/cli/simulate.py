@@ -28,8 +28,8 @@ from typing import Sequence
 
 from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
-from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, EVENT_MODES,
-                                             resolve_conditions, TARED_MODES)
+from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, CONTACT_SOUND_MODES,
+                                             EVENT_MODES, resolve_conditions, TARED_MODES)
 from contact_detector.sim.trial import HIT_KINDS, simulate_trial, simulate_trials
 from tqdm import tqdm
 
@@ -81,6 +81,10 @@ def build_parser() -> argparse.ArgumentParser:
                              'the change of the load since then): family (default): only the '
                              'geometry set draws it (tared or not, equal odds); everywhere: '
                              'every set draws it; all: every sensor is tared')
+    parser.add_argument('--contact-sound', choices=CONTACT_SOUND_MODES, default='family',
+                        help="the contact sound's level: family (default): as each set draws "
+                             'it (quieter only in quiet_contact and real_sounds); everywhere: '
+                             'every other set changes it by -24 to 0 dB')
     parser.add_argument('--hits', choices=HIT_KINDS, default=None,
                         help='give every trial this kind of exogenous event instead of the '
                              "set's cycle (mixed: any of hand, table, touch, brush, setdown "
@@ -121,7 +125,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         simulate_trial(seed=args.seed, index=args.start_index, condition=conditions[0],
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                        chunk_size=args.chunk_size, label_window_s=args.label_window,
-                       events=args.events, tared=args.tared, hits=args.hits)
+                       events=args.events, tared=args.tared, hits=args.hits,
+                       contact_sound=args.contact_sound)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -130,12 +135,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  start_index=args.start_index, audio_rate=args.audio_rate,
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window, events=args.events,
-                                 tared=args.tared, hits=args.hits)
+                                 tared=args.tared, hits=args.hits,
+                                 contact_sound=args.contact_sound)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
                     'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
                     'events': args.events, 'tared': args.tared, 'hits': args.hits}
+        if args.contact_sound != 'family':
+            # older manifests have no such key: 'family' is their mode
+            settings['contact_sound'] = args.contact_sound
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -371,6 +371,15 @@ TARED_MODES = ('family', 'everywhere', 'all')
 #: The ``tared`` draw of a set whose family does not draw it, with ``tared='everywhere'`` (the
 #: 'geometry' range; its own random stream, so the trial is otherwise unchanged).
 TARED_RANGE: Spec = _F_GEOMETRY['tared']
+#: How loud each trial's contact sound is: ``'family'``, as its family draws it (only
+#: 'quiet_contact' and 'real_sounds' change it); ``'everywhere'``, every set whose family does
+#: not draw ``contact_sound_db`` draws it from :data:`CONTACT_SOUND_RANGE`.
+CONTACT_SOUND_MODES = ('family', 'everywhere')
+#: The ``contact_sound_db`` draw of a set whose family does not draw it, with
+#: ``contact_sound='everywhere'``: the contact sound's peak changed by -24 to 0 dB. The two
+#: independent generators' contacts raise ``audio_rise_db`` by a median of 2.1 and 4.4 dB
+#: against the simulator's 11.7 (docs/decisions/2026-11-25-audio-gated-confirmation-screen.md).
+CONTACT_SOUND_RANGE: Spec = Range(-24.0, 0.0)
 
 
 @dataclass(frozen=True)

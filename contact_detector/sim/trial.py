@@ -47,9 +47,10 @@ streams ``[seed, index, k]`` draw the hit plan (k=1), the F/T sensor noise (k=2)
 (k=3), the chunking (k=4), the geometry (k=5) and, for the families only, the family
 parameters and hit kind (k=6); the 'real_sounds' family draws its audio (which recordings,
 where they start, the microphone's AGC phase) from k=7 instead of k=3. ``events='everywhere'``
-draws the missing event parameters from k=8 and ``tared='everywhere'`` the missing ``tared``
-from k=9. The hit plan therefore never changes the other parameters:
-``simulate_trial(..., hits='none')`` is the same trial without its exogenous impacts.
+draws the missing event parameters from k=8, ``tared='everywhere'`` the missing ``tared``
+from k=9 and ``contact_sound='everywhere'`` the missing ``contact_sound_db`` from k=10. The hit
+plan therefore never changes the other parameters: ``simulate_trial(..., hits='none')`` is the
+same trial without its exogenous impacts.
 """
 
 from dataclasses import dataclass, field, replace
@@ -58,7 +59,8 @@ from typing import Iterator, Sequence
 
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
-from contact_detector.sim.conditions import (DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
+from contact_detector.sim.conditions import (CONTACT_SOUND_MODES, CONTACT_SOUND_RANGE,
+                                             DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
                                              get_condition, resolve_conditions, TARED_MODES,
                                              TARED_RANGE)
 from contact_detector.sim.geometry import draw_geometry
@@ -181,7 +183,7 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
 
 
 def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
-                events, tared) -> None:
+                events, tared, contact_sound='family') -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
@@ -202,12 +204,16 @@ def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s,
         raise ConfigError(f'events must be one of {EVENT_MODES}, got {events!r}')
     if tared not in TARED_MODES:
         raise ConfigError(f'tared must be one of {TARED_MODES}, got {tared!r}')
+    if contact_sound not in CONTACT_SOUND_MODES:
+        raise ConfigError(f'contact_sound must be one of {CONTACT_SOUND_MODES}, '
+                          f'got {contact_sound!r}')
 
 
 def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rate: int = 16000,
                    ft_rate: float = 100.0, chunk_size: int | None = None,
                    label_window_s: float = 0.1, hits: str | None = None,
-                   events: str = 'family', tared: str = 'family') -> Trial:
+                   events: str = 'family', tared: str = 'family',
+                   contact_sound: str = 'family') -> Trial:
     """
     Synthesise one trial.
 
@@ -246,6 +252,12 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         (``default_rng([seed, index, 9])``); 'all': every sensor is tared. An untared trial's
         wrench and audio are the ones ``tared='family'`` gives. With 'everywhere' and 'all'
         every trial's ``params['family']`` is recorded, its ``tared`` the draw.
+    contact_sound : str
+        'family' (default) or 'everywhere' (``CONTACT_SOUND_MODES`` of :mod:`.conditions`):
+        with 'everywhere', a set whose family does not draw ``contact_sound_db`` draws it from
+        ``CONTACT_SOUND_RANGE`` (-24 to 0 dB on the contact sound's peak) in a stream of its
+        own (``default_rng([seed, index, 10])``); the rest of the trial is the one 'family'
+        gives, and ``params['family']`` is recorded.
 
     Returns
     -------
@@ -259,7 +271,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     """
     _check_args(seed=seed, index=index, audio_rate=audio_rate, ft_rate=ft_rate,
                 chunk_size=chunk_size, label_window_s=label_window_s, hits=hits,
-                events=events, tared=tared)
+                events=events, tared=tared, contact_sound=contact_sound)
     cond = get_condition(condition)
     seed, index, audio_rate, ft_rate = int(seed), int(index), int(audio_rate), float(ft_rate)
     rng = np.random.default_rng([seed, index])
@@ -281,6 +293,10 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     elif tared == 'everywhere' and 'tared' not in cond.family:
         # a stream of its own, so every other parameter stays what 'family' draws
         q = replace(q, tared=bool(TARED_RANGE.sample(np.random.default_rng([seed, index, 9]))))
+    if contact_sound == 'everywhere' and 'contact_sound_db' not in cond.family:
+        # a stream of its own, so every other parameter stays what 'family' draws
+        q = replace(q, contact_sound_db=float(CONTACT_SOUND_RANGE.sample(
+            np.random.default_rng([seed, index, 10]))))
     hit_kind = hits if hits is not None else drawn_kind
     # the 'real_sounds' family: recordings from the fetched bank (ConfigError if missing)
     bank = sound_bank.load_bank() if q.sound_source == 'real' else None
@@ -380,7 +396,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         derived.update(_family_facts(setup, force=force, torque=torque, start=start,
                                      thr_scale=thr_scale))
     params = p.as_dict()
-    if family or tared != 'family':
+    if family or tared != 'family' or contact_sound != 'family':
         params['family'] = _jsonable(q.as_dict())
     params['derived'] = _jsonable(derived)
     return Trial(name=f'trial_{index:04d}', condition=condition, seed=seed, start_time=start,

@@ -734,6 +734,44 @@ def test_cli_tared_is_in_the_manifest(tmp_path):
     assert np.linalg.norm(force[20:60].mean(axis=0)) < 0.05  # tared at rest
 
 
+def test_contact_sound_everywhere_only_quietens_the_contact():
+    quieter = 0
+    for index in range(4):
+        a = simulate_trial(seed=SEED, index=index, condition='paper', hits='none')
+        b = simulate_trial(seed=SEED, index=index, condition='paper', hits='none',
+                           contact_sound='everywhere')
+        db = b.params['family']['contact_sound_db']
+        assert -24.0 <= db <= 0.0
+        assert a.onset_t == b.onset_t
+        for name in ('force', 'torque', 'chunk_ends'):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+        onset = int((a.onset_t - a.start_time) * a.audio_rate)
+        # the microphone hears the same room up to the contact, then a quieter contact
+        assert np.array_equal(a.audio[:onset], b.audio[:onset])
+        after = slice(onset, onset + a.audio_rate // 20)
+        loud, soft = (float(np.sqrt(np.mean(np.square(x[after], dtype=float))))
+                      for x in (a.audio, b.audio))
+        assert soft <= loud * 1.001
+        quieter += soft < 0.9 * loud
+    assert quieter >= 2
+    # a family that draws its own contact level keeps it
+    fam = simulate_trial(seed=SEED, index=0, condition='quiet_contact', hits='none')
+    same = simulate_trial(seed=SEED, index=0, condition='quiet_contact', hits='none',
+                          contact_sound='everywhere')
+    assert np.array_equal(fam.audio, same.audio)
+    with pytest.raises(ConfigError, match='contact_sound'):
+        simulate_trial(seed=SEED, index=0, contact_sound='loud')
+
+
+def test_cli_contact_sound_is_in_the_manifest(tmp_path):
+    out = tmp_path / 'quiet'
+    assert simulate_main([str(out), '--trials', '1', '--seed', '4', '--conditions', 'paper',
+                          '--contact-sound', 'everywhere', '--quiet']) == 0
+    manifest = read_manifest(out)
+    assert manifest['settings']['contact_sound'] == 'everywhere'
+    assert -24.0 <= manifest['trials'][0]['params']['family']['contact_sound_db'] <= 0.0
+
+
 def test_quiet_contact_and_ego_noise_families():
     families, noise_only = set(), 0
     for index in range(8):
