@@ -723,15 +723,20 @@ def test_tared_everywhere_draws_both_and_an_untared_draw_is_the_family_trial():
     assert sum(kinds == {False, True} for kinds in others.values()) >= 5  # not one set's quirk
 
 
-def test_cli_tared_is_in_the_manifest(tmp_path):
-    out = tmp_path / 'tared'
+@pytest.mark.parametrize('flag, mode', [('tared', 'all'), ('contact-sound', 'everywhere')])
+def test_cli_mode_is_in_the_manifest(tmp_path, flag, mode):
+    out = tmp_path / 'set'
     assert simulate_main([str(out), '--trials', '2', '--seed', '4', '--conditions', 'paper',
-                          '--tared', 'all', '--quiet']) == 0
+                          f'--{flag}', mode, '--quiet']) == 0
     manifest = read_manifest(out)
-    assert manifest['settings']['tared'] == 'all'
-    assert [t['params']['family']['tared'] for t in manifest['trials']] == [True, True]
-    force = read_wrench(out / 'trial_0000').force
-    assert np.linalg.norm(force[20:60].mean(axis=0)) < 0.05  # tared at rest
+    assert manifest['settings'][flag.replace('-', '_')] == mode
+    family = [t['params']['family'] for t in manifest['trials']]
+    if flag == 'tared':
+        assert [f['tared'] for f in family] == [True, True]
+        force = read_wrench(out / 'trial_0000').force
+        assert np.linalg.norm(force[20:60].mean(axis=0)) < 0.05  # tared at rest
+    else:
+        assert all(-24.0 <= f['contact_sound_db'] <= 0.0 for f in family)
 
 
 def test_contact_sound_everywhere_only_quietens_the_contact():
@@ -761,15 +766,6 @@ def test_contact_sound_everywhere_only_quietens_the_contact():
     assert np.array_equal(fam.audio, same.audio)
     with pytest.raises(ConfigError, match='contact_sound'):
         simulate_trial(seed=SEED, index=0, contact_sound='loud')
-
-
-def test_cli_contact_sound_is_in_the_manifest(tmp_path):
-    out = tmp_path / 'quiet'
-    assert simulate_main([str(out), '--trials', '1', '--seed', '4', '--conditions', 'paper',
-                          '--contact-sound', 'everywhere', '--quiet']) == 0
-    manifest = read_manifest(out)
-    assert manifest['settings']['contact_sound'] == 'everywhere'
-    assert -24.0 <= manifest['trials'][0]['params']['family']['contact_sound_db'] <= 0.0
 
 
 def test_quiet_contact_and_ego_noise_families():
