@@ -45,7 +45,6 @@ from typing import Dict, List, Optional, Sequence
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_detector, run_features
-from contact_detector.detection.release import ReleaseLogic
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import discover_streams
@@ -54,10 +53,10 @@ from contact_detector.model.shipped import default_model_path
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.protocol import match_labels, read_labels_csv
 from contact_detector.training.sweep import fit_forest
-from lofo_frames import add_protocol_arguments, add_rule_argument, protocol_frames, rule_from
+from lofo_frames import (add_protocol_arguments, add_rule_argument, left_out_decisions,
+                         protocol_frames, rule_from)
 import numpy as np
 
-WARMUP_S = 0.5
 FEATURE = 'audio_rise_db'
 #: (X dB, K frames, M frames); M = 0 is the shipped rule
 GATES = [(0.0, 20, 0)] + [(x, 20, m) for x in (3.0, 6.0, 10.0) for m in (5, 10, 20)]
@@ -134,7 +133,6 @@ def lofo_trials(args: argparse.Namespace) -> List[dict]:
     """Return, every family left out in turn, the shipped rule's contact frames and the rise."""
     setting, frames, fit_frames, _ = protocol_frames(args)
     names = setting.config.feature_names
-    cols = [names.index(c) for c in setting.columns]
     rise = names.index(FEATURE)
     out = []
     for family in sorted({f.truth.condition for f in frames.values()}):
@@ -143,10 +141,8 @@ def lofo_trials(args: argparse.Namespace) -> List[dict]:
             forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=seed,
                                 jobs=args.jobs)
             for f in (f for f in frames.values() if f.truth.condition == family):
-                p = forest.predict_proba(f.x[:, cols])[:, 1]
-                logic = ReleaseLogic(rule=rule_from(args), armed=True)
-                contact, _ = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
-                                        blocked=f.t < f.t0 + WARMUP_S)
+                _, contact, _ = left_out_decisions(forest=forest, frames=f, setting=setting,
+                                                   rule=rule_from(args))
                 out.append({'family': family, 't': f.t, 'contact': contact,
                             'rise': f.x[:, rise], 'onset': f.truth.onset_t})
         print(f'left out: {family}', file=sys.stderr, flush=True)

@@ -42,13 +42,12 @@ import json
 from pathlib import Path
 import sys
 
-from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
 from contact_detector.training.sweep import fit_forest
-from lofo_frames import add_protocol_arguments, add_rule_argument, protocol_frames, rule_from
+from lofo_frames import (add_protocol_arguments, add_rule_argument, left_out_decisions,
+                         protocol_frames, rule_from)
 import numpy as np
 
-WARMUP_S = 0.5
 # score_trial's verdicts, as sweep --lofo counts them
 VERDICTS = {'detected': 'caught', 'premature': 'early', 'late': 'missed', 'missed': 'missed'}
 
@@ -86,10 +85,8 @@ def main(argv=None) -> int:
     add_protocol_arguments(parser)
     args = parser.parse_args(argv)
     setting, frames, fit_frames, protocol = protocol_frames(args)
-    config = setting.config
     manifests = [{t['name']: t for t in json.loads((f / 'manifest.json').read_text())['trials']}
                  for f in args.folders]
-    cols = [config.feature_names.index(c) for c in setting.columns]
     fit = [f for f in fit_frames.values() if f.truth.condition != args.family]
     test = {k: f for k, f in frames.items() if f.truth.condition == args.family}
     results = {k: [] for k in test}
@@ -97,10 +94,8 @@ def main(argv=None) -> int:
         forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=seed,
                             jobs=args.jobs)
         for key, f in test.items():
-            p = forest.predict_proba(f.x[:, cols])[:, 1]
-            logic = ReleaseLogic(rule=rule_from(args), armed=True)
-            _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
-                                     blocked=f.t < f.t0 + WARMUP_S)
+            _, _, releases = left_out_decisions(forest=forest, frames=f, setting=setting,
+                                                rule=rule_from(args))
             outcome = score_trial(truth=f.truth, releases=releases, events=())
             results[key].append(VERDICTS[outcome.verdict])
     keys = sorted(test)

@@ -46,13 +46,12 @@ import argparse
 from pathlib import Path
 import sys
 
-from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.training.sweep import fit_forest
-from lofo_frames import add_protocol_arguments, add_rule_argument, protocol_frames, rule_from
+from lofo_frames import (add_protocol_arguments, add_rule_argument, left_out_decisions,
+                         protocol_frames, rule_from)
 import numpy as np
 
-WARMUP_S = 0.5
 SHOWN = ('force_shift', 'force_shift_rel', 'force_carried_cos', 'torque_carried_cos',
          'force_change', 'force_change_max', 'force_shift_min', 'force_shift_max',
          'force_flux', 'torque_flux', 'audio_power_rel_db', 'audio_peak_rel_db',
@@ -90,15 +89,12 @@ def main(argv=None) -> int:
     print(f'{len(fit)} training trials{protocol} ({len(pos)} contact frames), {len(test)} '
           f'left out ({args.family}); features: {", ".join(shown)}')
     caught_rows = []
-    cols = [names.index(c) for c in setting.columns]
     for seed in (int(s) for s in args.seeds.split(',')):
         forest = fit_forest(frames=fit, setting=setting, n_estimators=10, seed=seed,
                             jobs=args.jobs)
         for f in test:
-            p = forest.predict_proba(f.x[:, cols])[:, 1]
-            logic = ReleaseLogic(rule=rule_from(args), armed=True)
-            _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
-                                     blocked=f.t < f.t0 + WARMUP_S)
+            p, _, releases = left_out_decisions(forest=forest, frames=f, setting=setting,
+                                                rule=rule_from(args))
             rel = [float(r) for r in np.atleast_1d(releases)] if releases is not None else []
             if not rel:
                 continue

@@ -26,8 +26,9 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 import pickle
-from typing import Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Sequence, Tuple
 
+from contact_detector.detection.release import ReleaseLogic
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
@@ -38,6 +39,7 @@ from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import FeatureSetting, lofo_setting, LOFO_SETTINGS
 from contact_detector.training.sweep import compute_frames, decode_bags
+import numpy as np
 
 
 def add_rule_argument(parser: argparse.ArgumentParser) -> None:
@@ -108,6 +110,43 @@ def protocol_frames(args: argparse.Namespace) -> Tuple[FeatureSetting, Dict[str,
     if args.event_weight != 1:
         text += f', event weight {args.event_weight:g}'
     return setting, frames, fit_frames, text
+
+
+#: Seconds after a recording's first frame in which no release may fire (the node's warm-up).
+WARMUP_S = 0.5
+
+
+def left_out_decisions(*, forest: Any, frames: Any, setting: FeatureSetting,
+                       rule: DecisionRule) -> Tuple[np.ndarray, np.ndarray, list]:
+    """
+    Decide one left-out trial's frames as the detector would, warm-up included.
+
+    Parameters
+    ----------
+    forest : fitted classifier
+        From ``fit_forest`` on the setting's columns.
+    frames : TrialFrames
+        The left-out trial's frames (``t`` s, shape (n,); ``x``, shape (n, n_features), the
+        full feature configuration's columns; ``t0`` its first frame).
+    setting : FeatureSetting
+        Which columns the forest reads.
+    rule : DecisionRule
+        The scored rule.
+
+    Returns
+    -------
+    p, contact : np.ndarray, shape (n,)
+        P(contact) and the rule's contact decision per frame.
+    releases : list of float
+        Release times, s.
+
+    """
+    names = setting.config.feature_names
+    p = forest.predict_proba(frames.x[:, [names.index(c) for c in setting.columns]])[:, 1]
+    contact, releases = ReleaseLogic(rule=rule, armed=True).step(
+        t=frames.t, p=p, valid=np.ones(frames.t.size, bool),
+        blocked=frames.t < frames.t0 + WARMUP_S)
+    return p, contact, releases
 
 
 def rule_from(args: argparse.Namespace) -> DecisionRule:

@@ -47,12 +47,13 @@ from pathlib import Path
 import sys
 from typing import Dict, List, Sequence, Tuple
 
+from contact_detector.io.bags import read_manifest
+
 
 def simulated_rows(folder: Path) -> List[Tuple[Path, str, str]]:
     """Bag path, onset start and end (s, as written) of each trial of a simulate folder."""
-    manifest = json.loads((folder / 'manifest.json').read_text())
     return [(folder / t['bag'], f"{t['onset_t']:.6f}", f"{t['onset_end_t']:.6f}")
-            for t in manifest['trials']]
+            for t in read_manifest(folder)['trials']]
 
 
 def generator_rows(folder: Path) -> List[Tuple[Path, str, str]]:

@@ -183,7 +183,7 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
 
 
 def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
-                events, tared, contact_sound='family') -> None:
+                events, tared, contact_sound) -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
