@@ -23,7 +23,8 @@ Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), miss
 premature (before the onset: the object is dropped), latency, and contact events blamed on
 exogenous impacts (within [-50, +500] ms of an impact, outside the true contact). Ground truth
 comes from ``--labels`` (the CSV ``train --labels`` takes: ``bag,onset_start,onset_end`` rows,
-several rows for a recording with several contacts), else the simulator's ``manifest.json``
+several rows for a recording with several contacts; a bag whose row ``label`` wrote without an
+onset is left out, with a warning), else the simulator's ``manifest.json``
 beside the bags (onset, lift-off, impacts, condition), else ``/contact_truth`` (onset only).
 A recording with several labelled contacts is scored per contact, as if the detector were
 re-armed for each (:func:`contact_detector.evaluation.metrics.score_onsets`). Every detector
@@ -50,7 +51,8 @@ from contact_detector.evaluation.report import comparison_table, recording_table
 from contact_detector.io.bags import find_bags
 from contact_detector.io.node_params import read_node_params
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.training.protocol import match_labels, read_labels_csv
+from contact_detector.training.protocol import (match_labels, read_labels_csv, unlabelled_bags,
+                                                without_truth)
 from tqdm import tqdm
 
 #: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
@@ -99,10 +101,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         labels = (match_labels(rows=read_labels_csv(args.labels), bags=list(found),
                                csv_path=args.labels) if args.labels else None)
         if labels is not None:
-            missing = [str(b) for b in found if b not in labels]
+            # rows that `label` wrote without an onset (with the reason): those bags are left
+            # out, as `train` leaves them out; read_labels_csv has warned about each
+            skipped = match_labels(rows=unlabelled_bags(args.labels), bags=list(found),
+                                   csv_path=args.labels)
+            found = {b: s for b, s in found.items() if b in labels or b not in skipped}
+            if not found:
+                raise BagError(f'{args.labels} gives no onset for any of the bags given')
+            missing = [str(b) for b in without_truth(bags=list(found), labelled=labels)]
             if missing:
                 raise BagError(f'{args.labels} has no onset for {", ".join(missing[:5])}'
-                               + (' ...' if len(missing) > 5 else ''))
+                               + (' ...' if len(missing) > 5 else '') + ', and they carry '
+                               'no /contact_truth or manifest.json entry: add their rows '
+                               '(contact-detector label proposes them)')
+            own = len(found) - len([b for b in found if b in labels])
+            if own:
+                print(f'contact-detector evaluate: {own} bags without a row in {args.labels} '
+                      'are scored against their own truth (manifest.json or /contact_truth)',
+                      file=sys.stderr)
         results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,

@@ -21,7 +21,8 @@ where it leaves its baseline and to the contact sound's onset). The CSV has one 
 ``bag,onset_start,onset_end,confidence,reason``: the format ``train --labels`` reads. A bag
 that cannot be labelled gets empty onsets, confidence 0 and the reason; readers skip it with a
 warning. ``--plots DIR`` writes a review figure per bag (|F|, |T|, the vector shift, the audio
-power and the proposed onset).
+power and the proposed onset). Like the other commands it prints what discovery found: topics,
+audio format and F/T rate, with their sources and warnings.
 """
 
 import argparse
@@ -34,7 +35,7 @@ from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.labelling import Proposal, propose_onset
 from contact_detector.io.bags import (find_bags, manifest_entry, read_wrench,
                                       recording_names, topic_types)
-from contact_detector.io.discovery import discover_streams
+from contact_detector.io.discovery import discover_streams, Streams, summary_lines
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
 import numpy as np
 from tqdm import tqdm
@@ -73,18 +74,25 @@ def _wrench_only_topic(bag: Path, given: Optional[str]) -> str:
     return found[0]
 
 
-def label_bag(bag: Path, *, args: argparse.Namespace) -> tuple[Proposal, dict]:
-    """Read one bag and propose its onset; return the proposal and the arrays for a figure."""
+def label_bag(bag: Path, *,
+              args: argparse.Namespace) -> tuple[Proposal, dict, Optional[Streams]]:
+    """
+    Read one bag and propose its onset.
+
+    Returns the proposal, the arrays for a figure and what discovery found (None when it
+    failed and the F/T topic was found by its type alone).
+    """
     entry = manifest_entry(bag) or {}
-    audio = rate = audio_t0 = None
+    audio = rate = audio_t0 = streams = None
     try:
         streams = discover_streams(bag, wrench_topic=args.wrench_topic,
                                    audio_topic=args.audio_topic, audio_rate=args.audio_rate,
-                                   param_audio_rate=entry.get('audio_rate'))
-        for line in streams.warnings:
-            print(f'{PROG}: warning: {bag.name}: {line}', file=sys.stderr)
-        wrench_topic = streams.wrench_topic
-        if not args.no_audio:
+                                   param_audio_rate=entry.get('audio_rate'),
+                                   allow_no_audio=True)
+        wrench_topic = streams.wrench_topic    # its warnings are printed with the summary
+        if not streams.has_audio and not args.no_audio:
+            print(f'{PROG}: warning: {bag.name}: F/T only (no audio topic)', file=sys.stderr)
+        if streams.has_audio and not args.no_audio:
             series = read_audio_series(bag, spec=StreamSpec(
                 wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,
                 audio_msg_type=streams.audio_msg_type, channels=streams.channels,
@@ -102,7 +110,7 @@ def label_bag(bag: Path, *, args: argparse.Namespace) -> tuple[Proposal, dict]:
     proposal = propose_onset(ft_t=t, force=force, torque=torque, audio=audio,
                              audio_rate=rate, audio_t0=audio_t0)
     return proposal, {'t': t, 'force': force, 'torque': torque, 'audio': audio, 'rate': rate,
-                      'audio_t0': audio_t0, 'truth': entry.get('onset_t')}
+                      'audio_t0': audio_t0, 'truth': entry.get('onset_t')}, streams
 
 
 def plot_proposal(*, bag: Path, proposal: Proposal, data: dict, output: Path) -> Path:
@@ -174,11 +182,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f'{PROG}: error: {err}', file=sys.stderr)
         return 1
     rows = []
+    found = []
     # the file name, or as much of the path as tells apart bags that share it
     names = recording_names(bags)
     for bag in tqdm(bags, desc='label', unit='bag', disable=len(bags) < 2):
         try:
-            proposal, data = label_bag(bag, args=args)
+            proposal, data, streams = label_bag(bag, args=args)
+            if streams is not None:
+                found.append((bag, streams))
         except ContactDetectorError as err:
             print(f'{PROG}: {names[bag]}: {err}', file=sys.stderr)
             rows.append([names[bag], '', '', '0.0', f'unreadable: {err}'.replace(',', ';')])
@@ -191,6 +202,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.plots is not None:
             plot_proposal(bag=bag, proposal=proposal, data=data,
                           output=args.plots / f'{names[bag]}.png')
+    # what discovery found, as the other commands print it (after the bars: once per run)
+    for line in summary_lines(found):
+        print(f'{PROG}: {line}')
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, 'w', newline='') as handle:
         writer = csv.writer(handle)

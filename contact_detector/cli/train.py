@@ -19,7 +19,8 @@
                            [--labels labels.csv] [--with-sim N [--sim-dir DIR]]
 
 Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with rows
-``bag,onset_start,onset_end``, several rows for a recording with several contacts); features
+``bag,onset_start,onset_end``, several rows for a recording with several contacts; a bag the
+CSV does not name keeps its ``/contact_truth``, and one with neither is refused); features
 from the same streaming core the node runs. ``--with-sim N`` adds N simulated trials of the
 ``wide`` condition sets (all twelve simulator families, at the recordings' F/T rate to 1 Hz
 and audio rate, labelled by the simulator's truth) in the shipped model's proportions: N - M
@@ -50,7 +51,8 @@ from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import match_labels, read_labels_csv, unlabelled_bags
+from contact_detector.training.protocol import (match_labels, read_labels_csv, unlabelled_bags,
+                                                without_truth)
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
                                               simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
@@ -130,11 +132,17 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
                                csv_path=args.labels)
         user_bags = [b for b in user_bags if b in csv_onsets or b not in skipped]
         found = {b: found[b] for b in user_bags}     # bags label could not label are left out
-        missing = [str(b) for b in user_bags if b not in csv_onsets]
+        missing = [str(b) for b in without_truth(bags=user_bags, labelled=csv_onsets)]
         if missing:
-            print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}',
-                  file=sys.stderr)
+            print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}'
+                  + (' ...' if len(missing) > 5 else '') + ', and they carry no '
+                  '/contact_truth or manifest.json entry: add their rows (contact-detector '
+                  'label proposes them)', file=sys.stderr)
             return 1
+        own = len(user_bags) - len([b for b in user_bags if b in csv_onsets])
+        if own:
+            print(f'contact-detector train: {own} bags without a row in {args.labels} are '
+                  'labelled by their own truth (/contact_truth)')
     sim = None
     if args.with_sim:
         ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))

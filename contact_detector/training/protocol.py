@@ -33,6 +33,7 @@ from contact_detector.errors import BagError, ConfigError
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
+from contact_detector.io.bags import manifest_entry, topic_types, TRUTH_TOPIC
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 from contact_detector.training.augmentation import augment_events, WrenchAugmentation
 import numpy as np
@@ -274,6 +275,32 @@ def unlabelled_bags(path: Path) -> Dict[str, str]:
     """``bag`` cells of a labels CSV whose row has no onset -> the reason given (may be '')."""
     return {c[0]: (c[-1] if len(c) > 3 else '')
             for _n, c, _line in _label_rows(path) if len(c) > 1 and c[1] == ''}
+
+
+def without_truth(*, bags: Sequence[Path], labelled: Mapping[Path, Any]) -> List[Path]:
+    """
+    Return the bags that neither a labels CSV row nor a truth of their own labels.
+
+    A bag that no row of ``--labels`` names keeps the truth it carries, as without
+    ``--labels``: a ``/contact_truth`` topic, or an entry in the simulator's ``manifest.json``
+    beside it (simulated trials mixed with labelled recordings). Only the topic index and the
+    manifest are read.
+
+    Parameters
+    ----------
+    bags : sequence of Path
+        The bags of the command.
+    labelled : mapping
+        Bag -> onsets, from :func:`match_labels`.
+
+    Returns
+    -------
+    list of Path
+        The bags with neither, in the order of ``bags``.
+
+    """
+    return [bag for bag in bags if bag not in labelled and manifest_entry(bag) is None
+            and TRUTH_TOPIC not in topic_types(bag)]
 
 
 def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path) -> Dict[Path, T]:

@@ -291,11 +291,14 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
     """
     sources = {}
     if user:
-        contacts = sum(len(csv_onsets[b]) for b in user) if csv_onsets else len(user)
+        rows = [b for b in user if b in (csv_onsets or {})]
+        contacts = sum(len(csv_onsets[b]) for b in rows) + len(user) - len(rows)
+        own = 'the /contact_truth topic or the simulator manifest of each bag'
         sources['recordings'] = {
             'count': len(user), 'contacts': contacts, 'bags': sorted(b.name for b in user),
-            'labels': f'{labels_path.name} (--labels)' if labels_path else
-            'the /contact_truth topic or the simulator manifest of each bag'}
+            'labels': (f'{labels_path.name} (--labels)' if len(rows) == len(user) else
+                       f'{labels_path.name} (--labels) for {len(rows)}, {own} for the other '
+                       f'{len(user) - len(rows)}') if labels_path else own}
     if sim is not None and sim.bags:
         first = next(iter(sim.parts.values()))
         parts = {}
@@ -401,7 +404,8 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     user_bags : sequence of Path
         The recordings among them (the rest are simulated trials, named ``sim/<name>``).
     csv_onsets : dict or None
-        Bag -> labelled onsets, s (``--labels``, :func:`.protocol.match_labels`).
+        Bag -> labelled onsets, s (``--labels``, :func:`.protocol.match_labels`); a bag it
+        does not name is labelled by its ``/contact_truth``.
     manifest : dict
         Bag -> simulator manifest entry (:func:`~contact_detector.evaluation.truth.conditions_of`).
     sources : dict
@@ -454,8 +458,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         return trial_features(bag=bag, config=config, spec=stream_spec(streams, {}),
                               audio_rate=streams.audio_rate or NO_AUDIO_RATE,
                               wrench_rate=streams.wrench_rate, label_window=labels,
-                              onsets=csv_onsets[bag] if csv_onsets and bag in user
-                              else None,
+                              onsets=(csv_onsets or {}).get(bag) if bag in user else None,
                               condition=manifest.get(bag, {}).get('condition', ''),
                               augmentation=augmentation,
                               augment_seed=trial_seed(seed=seed, name=bag.name),
@@ -507,6 +510,6 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         metrics['events_test_trials'] = event_metrics(
             bundle=bundle, bags=progress(test_bags, 'events'), spec=StreamSpec(),
             audio_rate=16000.0, wrench_rate=100.0, manifest=manifest, found=found,
-            labels={b: csv_onsets[b] for b in test_bags if b in user}
+            labels={b: csv_onsets[b] for b in test_bags if b in user and b in csv_onsets}
             if csv_onsets else None)
     return TrainedModel(bundle=bundle, results=results, x=x, training=training, metrics=metrics)

@@ -17,6 +17,7 @@
 import csv
 import dataclasses
 
+from contact_detector.cli import evaluate as evaluate_cli
 from contact_detector.cli import label as label_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.errors import InputError
@@ -88,6 +89,24 @@ def test_train_accepts_the_csv_label_writes(labelled):
         assert train_cli.main([str(labelled['bags']), '--labels', str(labelled['csv']),
                                '--no-events', '--jobs', '1', '--out', str(model)]) == 0
     assert load_bundle(path=model).training['trials'] == len(TRIALS)
+
+
+def test_evaluate_accepts_the_csv_label_writes(labelled, capsys):
+    # the bag label could not label is left out, as train leaves it out; the rest are scored
+    with pytest.warns(UserWarning, match='no onset'):
+        assert evaluate_cli.main([str(labelled['bags']), '--labels', str(labelled['csv']),
+                                  '--detector', 'threshold']) == 0
+    table = capsys.readouterr().out.split('| recording |', 1)[1]
+    assert all(f'| {bag} |' in table for bag in labelled['truth'])
+    assert labelled['still'] not in table
+
+
+def test_label_prints_what_it_found(labelled, tmp_path, capsys):
+    ros1 = next(b for b in labelled['bags'].iterdir() if b.suffix == '.bag')
+    assert label_cli.main([str(ros1), '--out', str(tmp_path / 'one.csv')]) == 0
+    printed = capsys.readouterr().out
+    assert (f'contact-detector label: {ros1.name}: wrench /wrist_wrench at 100 Hz (stamps); '
+            'audio /audio [std_msgs/Int16MultiArray] 16000 Hz') in printed
 
 
 def test_orientation_and_tare_do_not_matter():

@@ -568,6 +568,41 @@ def test_train_with_labels_csv(data, no_truth, tmp_path):
                            str(tmp_path / 'x.npz')]) == 1
 
 
+def test_bags_a_csv_does_not_name_keep_their_own_truth(data, no_truth, tmp_path, capsys):
+    # A user's labelled recordings beside simulated trials: the CSV names only the recordings
+    # (by path: the simulated folder holds trials of the same names).
+    out, names = no_truth
+    labels = tmp_path / 'labels.csv'
+    labels.write_text('bag,onset_start,onset_end\n' + ''.join(
+        f'{out / n},{data["trials"][n].onset_t!r},{data["trials"][n].onset_end_t!r}\n'
+        for n in names))
+    model = tmp_path / 'mixed.npz'
+    assert train_cli.main([str(out), str(data['bags']), '--labels', str(labels), '--no-events',
+                           '--jobs', '1', '--trees', '2', '--out', str(model)]) == 0
+    assert (f'{N_TRIALS} bags without a row in {labels} are labelled by their own truth'
+            in capsys.readouterr().out)
+    bundle = load_bundle(path=model)
+    assert bundle.training['trials'] == len(names) + N_TRIALS
+    assert bundle.training['sources']['recordings']['labels'] == (
+        f'labels.csv (--labels) for {len(names)}, the /contact_truth topic or the simulator '
+        f'manifest of each bag for the other {N_TRIALS}')
+    # evaluate scores the simulated trial against its manifest and the copy by its row
+    simulated = data['bags'] / 'trial_0007'
+    assert cli_main.main(['evaluate', str(out / names[0]), str(simulated), '--model',
+                          str(data['model']), '--labels', str(labels), '--detector',
+                          'threshold']) == 0
+    assert '1 bags without a row' in capsys.readouterr().err
+    # a bag with neither a row nor a truth of its own is refused by both, naming it
+    labels.write_text(''.join(labels.read_text().splitlines(keepends=True)[:-1]))
+    for command in (['train', '--no-events', '--jobs', '1', '--out', str(tmp_path / 'x.npz')],
+                    ['evaluate', '--model', str(data['model'])]):
+        assert cli_main.main([command[0], str(out), str(data['bags']), '--labels', str(labels),
+                              *command[1:]]) == 1
+        err = capsys.readouterr().err
+        assert names[-1] in err and 'carry no /contact_truth or manifest.json entry' in err
+    assert not (tmp_path / 'x.npz').exists()
+
+
 def test_no_truth_and_no_labels_is_a_clear_error(data, no_truth, tmp_path, capsys):
     out, _ = no_truth
     result = run_cli('train', out, '--no-events', '--jobs', '1', '--out',

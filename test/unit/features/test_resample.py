@@ -214,7 +214,8 @@ def test_ft_only_frames_move_only_their_time_and_only_off_the_grid(rate):
     assert np.all(late < np.diff(t).max())
 
 
-@pytest.mark.parametrize('rate', [51.0, 125.0])
+# every rate issue #15 names, and the ends of the range the node takes
+@pytest.mark.parametrize('rate', [50.0, 51.0, 125.0, 200.0, 333.0, 500.0, 1000.0, 10000.0])
 def test_the_live_path_keeps_every_ft_frame_a_sample_completes(rate):
     """
     One wrench message per sample (the node): the rows of ``push_wrench``, bit for bit.
