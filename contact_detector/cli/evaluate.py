@@ -44,15 +44,14 @@ from typing import List, Optional, Sequence
 
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.detection.factory import build_detector_factory
-from contact_detector.errors import BagError, ContactDetectorError
+from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.baselines import BASELINES
 from contact_detector.evaluation.compare import evaluate
 from contact_detector.evaluation.report import comparison_table, recording_table, write_report
 from contact_detector.io.bags import find_bags
 from contact_detector.io.node_params import read_node_params
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.training.protocol import (match_labels, read_labels_csv, unlabelled_bags,
-                                                without_truth)
+from contact_detector.training.protocol import labels_for
 from tqdm import tqdm
 
 #: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
@@ -98,27 +97,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         found = dict(discover_all(find_bags(args.bags), args=args, params=params,
                                   prog='contact-detector evaluate',
                                   allow_no_audio=make.decides_without_audio))
-        labels = (match_labels(rows=read_labels_csv(args.labels), bags=list(found),
-                               csv_path=args.labels) if args.labels else None)
-        if labels is not None:
-            # rows that `label` wrote without an onset (with the reason): those bags are left
-            # out, as `train` leaves them out; read_labels_csv has warned about each
-            skipped = match_labels(rows=unlabelled_bags(args.labels), bags=list(found),
-                                   csv_path=args.labels)
-            found = {b: s for b, s in found.items() if b in labels or b not in skipped}
-            if not found:
-                raise BagError(f'{args.labels} gives no onset for any of the bags given')
-            missing = [str(b) for b in without_truth(bags=list(found), labelled=labels)]
-            if missing:
-                raise BagError(f'{args.labels} has no onset for {", ".join(missing[:5])}'
-                               + (' ...' if len(missing) > 5 else '') + ', and they carry '
-                               'no /contact_truth or manifest.json entry: add their rows '
-                               '(contact-detector label proposes them)')
-            own = len(found) - len([b for b in found if b in labels])
-            if own:
-                print(f'contact-detector evaluate: {own} bags without a row in {args.labels} '
-                      'are scored against their own truth (manifest.json or /contact_truth)',
-                      file=sys.stderr)
+        labels = None
+        if args.labels:
+            labelled = labels_for(csv_path=args.labels, bags=list(found))
+            labels = labelled.onsets
+            found = {b: s for b, s in found.items() if b not in labelled.left_out}
+            if labelled.own_truth:
+                print(f'contact-detector evaluate: {len(labelled.own_truth)} bags without a row '
+                      f'in {args.labels} are scored against their own truth (manifest.json or '
+                      '/contact_truth)', file=sys.stderr)
         results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,

@@ -51,8 +51,7 @@ from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import (match_labels, read_labels_csv, unlabelled_bags,
-                                                without_truth)
+from contact_detector.training.protocol import labels_for
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
                                               simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
@@ -125,24 +124,15 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
                                                    prog='contact-detector train',
                                                    allow_no_audio=config.ft_only))
     user_bags = list(found)
-    csv_onsets = (match_labels(rows=read_labels_csv(args.labels), bags=user_bags,
-                               csv_path=args.labels) if args.labels else None)
-    if csv_onsets is not None:
-        skipped = match_labels(rows=unlabelled_bags(args.labels), bags=user_bags,
-                               csv_path=args.labels)
-        user_bags = [b for b in user_bags if b in csv_onsets or b not in skipped]
+    csv_onsets = None
+    if args.labels:
+        labelled = labels_for(csv_path=args.labels, bags=user_bags)
+        csv_onsets = labelled.onsets
+        user_bags = [b for b in user_bags if b not in labelled.left_out]
         found = {b: found[b] for b in user_bags}     # bags label could not label are left out
-        missing = [str(b) for b in without_truth(bags=user_bags, labelled=csv_onsets)]
-        if missing:
-            print(f'contact-detector train: {args.labels} has no onset for {missing[:5]}'
-                  + (' ...' if len(missing) > 5 else '') + ', and they carry no '
-                  '/contact_truth or manifest.json entry: add their rows (contact-detector '
-                  'label proposes them)', file=sys.stderr)
-            return 1
-        own = len(user_bags) - len([b for b in user_bags if b in csv_onsets])
-        if own:
-            print(f'contact-detector train: {own} bags without a row in {args.labels} are '
-                  'labelled by their own truth (/contact_truth)')
+        if labelled.own_truth:
+            print(f'contact-detector train: {len(labelled.own_truth)} bags without a row in '
+                  f'{args.labels} are labelled by their own truth (/contact_truth)')
     sim = None
     if args.with_sim:
         ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))

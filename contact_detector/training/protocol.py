@@ -277,30 +277,70 @@ def unlabelled_bags(path: Path) -> Dict[str, str]:
             for _n, c, _line in _label_rows(path) if len(c) > 1 and c[1] == ''}
 
 
-def without_truth(*, bags: Sequence[Path], labelled: Mapping[Path, Any]) -> List[Path]:
+@dataclass(frozen=True)
+class CsvLabels:
     """
-    Return the bags that neither a labels CSV row nor a truth of their own labels.
+    What a labels CSV says of the bags of one command (:func:`labels_for`).
 
-    A bag that no row of ``--labels`` names keeps the truth it carries, as without
-    ``--labels``: a ``/contact_truth`` topic, or an entry in the simulator's ``manifest.json``
-    beside it (simulated trials mixed with labelled recordings). Only the topic index and the
-    manifest are read.
+    Attributes
+    ----------
+    onsets : dict
+        Bag -> its labelled onsets, s.
+    left_out : list of Path
+        Bags whose row has no onset (``label`` could not label them): the command leaves them
+        out.
+    own_truth : list of Path
+        Bags no row names that carry a truth of their own: a ``/contact_truth`` topic or an
+        entry in the simulator's ``manifest.json`` beside them.
+
+    """
+
+    onsets: Dict[Path, List[float]]
+    left_out: List[Path]
+    own_truth: List[Path]
+
+
+def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
+    """
+    Match a labels CSV to the bags of a command (``train --labels``, ``evaluate --labels``).
+
+    A bag no row names keeps the truth it carries, as without ``--labels`` (simulated trials
+    beside labelled recordings); for that only the topic index and the manifest are read. A bag
+    whose row has no onset is left out (:func:`read_labels_csv` has warned about it).
 
     Parameters
     ----------
+    csv_path : Path
+        The CSV file.
     bags : sequence of Path
         The bags of the command.
-    labelled : mapping
-        Bag -> onsets, from :func:`match_labels`.
 
     Returns
     -------
-    list of Path
-        The bags with neither, in the order of ``bags``.
+    CsvLabels
+
+    Raises
+    ------
+    BagError
+        A bag has neither a row nor a truth of its own (the message names them and how to add
+        their rows), no bag is left, or :func:`match_labels` refuses a row.
 
     """
-    return [bag for bag in bags if bag not in labelled and manifest_entry(bag) is None
-            and TRUTH_TOPIC not in topic_types(bag)]
+    onsets = match_labels(rows=read_labels_csv(csv_path), bags=bags, csv_path=csv_path)
+    skipped = match_labels(rows=unlabelled_bags(csv_path), bags=bags, csv_path=csv_path)
+    left_out = [b for b in bags if b not in onsets and b in skipped]
+    kept = [b for b in bags if b not in left_out]
+    if not kept:
+        raise BagError(f'{csv_path} gives no onset for any of the bags given')
+    missing = [str(b) for b in kept if b not in onsets and manifest_entry(b) is None
+               and TRUTH_TOPIC not in topic_types(b)]
+    if missing:
+        raise BagError(f'{csv_path} has no onset for {", ".join(missing[:5])}'
+                       + (' ...' if len(missing) > 5 else '') + ', and they carry no '
+                       '/contact_truth or manifest.json entry: add their rows '
+                       '(contact-detector label proposes them)')
+    return CsvLabels(onsets=onsets, left_out=left_out,
+                     own_truth=[b for b in kept if b not in onsets])
 
 
 def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path) -> Dict[Path, T]:
