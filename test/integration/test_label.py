@@ -16,9 +16,14 @@
 
 import csv
 import dataclasses
+import importlib.util
+from pathlib import Path
+import subprocess
+import sys
 
 from contact_detector.cli import evaluate as evaluate_cli
 from contact_detector.cli import label as label_cli
+from contact_detector.cli import simulate as simulate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.errors import InputError
 from contact_detector.evaluation.labelling import hinge_fit, NO_CHANGE, propose_onset
@@ -28,6 +33,7 @@ from contact_detector.sim.trial import simulate_trial
 from contact_detector.training.protocol import read_labels_csv
 import numpy as np
 import pytest
+from scipy.stats import binomtest, norm
 
 pytestmark = pytest.mark.slow   # simulates bags, labels and trains
 
@@ -107,6 +113,34 @@ def test_label_prints_what_it_found(labelled, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert (f'contact-detector label: {ros1.name}: wrench /wrist_wrench at 100 Hz (stamps); '
             'audio /audio [std_msgs/Int16MultiArray] 16000 Hz') in printed
+
+
+def test_label_accuracy_pools_sets_and_gives_the_interval(tmp_path):
+    # benchmarks/label_accuracy.py, the command behind the accuracy the docs quote
+    script = Path(__file__).resolve().parents[2] / 'benchmarks' / 'label_accuracy.py'
+    sets = [tmp_path / 'a', tmp_path / 'b']
+    for seed, folder in enumerate(sets):
+        assert simulate_cli.main([str(folder), '--trials', '3', '--seed', str(40 + seed),
+                                  '--conditions', 'paper', '--quiet']) == 0
+    done = subprocess.run([sys.executable, str(script), '--dir', *map(str, sets)],
+                          capture_output=True, text=True, check=True)
+    rows = {line.split('|')[1].strip(): line for line in done.stdout.splitlines()
+            if line.startswith('| ')}
+    assert '| 6 |' in rows['all'] and '(6/6, 95 % 61.0-100.0 %)' in rows['all']
+    assert f'{sets[0]}: 3/3 within 20 ms' in done.stdout
+    # the interval is Wilson's: scipy's reference, 813 of 816 (scipy's z is not rounded)
+    spec = importlib.util.spec_from_file_location('label_accuracy', script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    reference = binomtest(813, 816).proportion_ci(method='wilson')
+    assert module.wilson(hits=813, n=816, z=norm.ppf(0.975)) == pytest.approx(
+        (reference.low, reference.high), abs=1e-12)
+    # pooled sets must exist: a clear usage error, before any labelling
+    empty = tmp_path / 'empty'
+    empty.mkdir()
+    refused = subprocess.run([sys.executable, str(script), '--dir', str(sets[0]), str(empty)],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2 and 'must be simulated first' in refused.stderr
 
 
 def test_orientation_and_tare_do_not_matter():
