@@ -332,8 +332,10 @@ def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
     kept = [b for b in bags if b not in left_out]
     if not kept:
         raise BagError(f'{csv_path} gives no onset for any of the bags given')
-    missing = [str(b) for b in kept if b not in onsets and manifest_entry(b) is None
-               and TRUTH_TOPIC not in topic_types(b)]
+    # the topic index first: a simulated bag always has the topic, and manifest_entry parses
+    # the folder's whole manifest for each bag it is asked about
+    missing = [str(b) for b in kept if b not in onsets and TRUTH_TOPIC not in topic_types(b)
+               and manifest_entry(b) is None]
     if missing:
         raise BagError(f'{csv_path} has no onset for {", ".join(missing[:5])}'
                        + (' ...' if len(missing) > 5 else '') + ', and they carry no '
