@@ -93,8 +93,8 @@ class WrenchAugmentation:
     """
 
     # The milder of the two settings measured by leaving each family out
-    # (docs/generalisation.md): a tare on half the trials and torque x 1/3..3 cost more
-    # latency on the paper's families.
+    # (docs/decisions/2026-11-23-augment-the-wrench.md): a tare on half the trials and
+    # torque x 1/3..3 cost more latency on the paper's families.
     tare_probability: float = 0.25
     tare_window_s: Tuple[float, float] = (0.2, 0.6)
     torque_scale: Tuple[float, float] = (0.5, 2.0)

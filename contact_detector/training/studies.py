@@ -84,7 +84,7 @@ LOFO_SETTINGS = {
     'ft-only+signed+w32': _SPECTRAL + _SHIFT + _SIGNED,
     # the shipped columns and the share of the carried torque against that of the carried
     # force that changed: a table takes the weight off under the centre of mass, a brush or a
-    # knock pushes elsewhere (docs/generalisation.md, "A brush against the table")
+    # knock pushes elsewhere (docs/decisions/2026-11-24-brush-lever-not-shipped.md)
     'lever': tuple(DEFAULT_FEATURES.feature_names) + ('ft_carried_lever',),
     # the shipped columns and the quietest of the last 4 (8) audio frames above the floor: a
     # brush scrapes for 0.15-0.6 s, a touch clicks for tens of ms (issue #14)

@@ -50,8 +50,9 @@ def test_shipped_models_are_found_without_ros_and_the_node_searches_the_same_pla
 
 
 def test_shipped_ft_model_has_the_columns_it_was_chosen_with_and_trains_defaults() -> None:
-    # docs/offline.md: chosen as sweep --lofo's ft-only+signed+carried; train --no-audio
-    # rebuilds the same columns without --extra-features
+    # docs/decisions/2026-11-24-ft-only-carried-load-features.md: chosen as sweep --lofo's
+    # ft-only+signed+carried; train --no-audio rebuilds the same columns without
+    # --extra-features
     config = load_bundle(path=default_ft_model_path()).feature_config
     assert set(config.feature_names) == set(LOFO_SETTINGS['ft-only+signed+carried'])
     assert config.extra_features == DEFAULT_FT_ONLY_EXTRA
