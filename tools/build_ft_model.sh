@@ -20,7 +20,11 @@
 # ft-only+signed+carried+aug, docs/decisions/2026-11-24-ft-only-augmentation.md); every frame
 # weighs the same (--event-weight 1: the multimodal model's weight 3 on the frames near a
 # simulated event released early more often left out, docs/decisions/2026-11-25-ft-only-
-# event-weight-screen.md). Arm the node while the hand holds the object still (docs/node.md).
+# event-weight-screen.md); the load path on top of that rule: also release when the force
+# has stayed 2 N from the load carried at the arming for 20 frames (0.2 s) and the mean
+# P(contact) of the last 25 frames is at least 0.15 (chosen on fresh trials of the two
+# independent generators and left out, docs/decisions/2026-11-28-ft-only-load-path.md).
+# Arm the node while the hand holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
 set -euo pipefail
@@ -47,6 +51,7 @@ fi
   --extra-features force_shift,torque_shift,force_shift_min,torque_shift_min,force_shift_max,torque_shift_max,force_change,torque_change,force_change_max,torque_change_max,force_shift_rel,torque_shift_rel,force_carried_cos,torque_carried_cos \
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
+  --load-threshold 2 --load-frames 20 --load-support 0.15 --load-support-frames 25 \
   --augment --augment-tare 0.5 --augment-torque 0.333,3 \
   --event-weight 1 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

@@ -22,11 +22,11 @@ import argparse
 from typing import Callable, Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
-from contact_detector.model.rule import DecisionRule
+from contact_detector.model.rule import DecisionRule, LOAD_FIELDS
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
-from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_RULE, recipe_defaults,
-                                              RecipeDefaults)
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_RULE,
+                                              DEFAULT_RULE, recipe_defaults, RecipeDefaults)
 
 _T = TypeVar('_T')
 
@@ -110,6 +110,19 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help='evidence path: also contact when the sum of P(contact) - '
                              '--evidence-drift over consecutive frames reaches this (0 = off)')
     parser.add_argument('--evidence-drift', type=float, default=DEFAULT_RULE.evidence_drift)
+    parser.add_argument('--load-threshold', type=float, default=None, metavar='N',
+                        help='load path: also contact when the force has stayed this many N '
+                             'from the load carried at the start or arming for --load-frames '
+                             'frames and the mean P(contact) of --load-support-frames frames '
+                             '>= --load-support (0 = off; default '
+                             f'{DEFAULT_RULE.load_threshold:g}; with --no-audio '
+                             f'{DEFAULT_FT_ONLY_RULE.load_threshold:g})')
+    parser.add_argument('--load-frames', type=int, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_frames}')
+    parser.add_argument('--load-support', type=float, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_support:g}')
+    parser.add_argument('--load-support-frames', type=int, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_support_frames}')
 
 
 def tree_counts(text: str) -> list:
@@ -127,13 +140,21 @@ def tree_counts(text: str) -> list:
 
 
 def rule_from_args(args: argparse.Namespace) -> DecisionRule:
-    """Build the DecisionRule from parsed options."""
+    """
+    Build the DecisionRule from parsed options.
+
+    The load path's options not given take the defaults of the model kind: the F/T-only
+    recipe's with ``--no-audio``, else the multimodal one's.
+    """
+    kind = DEFAULT_FT_ONLY_RULE if getattr(args, 'no_audio', False) else DEFAULT_RULE
+    load = {name: (getattr(kind, name) if getattr(args, name, None) is None
+                   else getattr(args, name)) for name in LOAD_FIELDS}
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,
                         sustain_threshold=args.sustain_threshold,
                         evidence_threshold=args.evidence_threshold,
-                        evidence_drift=args.evidence_drift)
+                        evidence_drift=args.evidence_drift, **load)
 
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:

@@ -59,6 +59,7 @@ from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.rule import DecisionRule, LOAD_FIELDS
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
@@ -178,11 +179,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='--model: also score, per folder, the trials with a knock on the '
                              'hand while the object is in the air (simulator manifests)')
     add_stream_arguments(parser)
+    parser.add_argument('--load-threshold', type=float, default=0.0, metavar='N',
+                        help="also score the shipped rule (--lofo) or the model's rule "
+                             '(--model) with the load path: contact when the force stayed '
+                             'N from the carried load for --load-frames frames and the mean '
+                             'P(contact) of --load-support-frames frames >= --load-support '
+                             '(default 0: not scored)')
+    parser.add_argument('--load-frames', type=int, default=DecisionRule.load_frames)
+    parser.add_argument('--load-support', type=float, default=DecisionRule.load_support)
+    parser.add_argument('--load-support-frames', type=int,
+                        default=DecisionRule.load_support_frames)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
     if (args.own_test is not None or args.knocks) and args.model is None:
         parser.error('--own-test and --knocks need --model')
+    try:
+        args.load = load_fields(args)
+    except ContactDetectorError as err:
+        parser.error(str(err))
     if args.model is not None:
         try:
             output = with_model(args)
@@ -213,7 +228,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 label=label, trees=args.trees, seed=args.seed, seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
                 families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
-                jobs=args.jobs, progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
+                jobs=args.jobs, load=args.load,
+                progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         except ContactDetectorError as err:
             parser.error(str(err))
         print(output)
@@ -284,7 +300,17 @@ def with_model(args) -> str:
                            'in the air', knocked))
     return model_study(bundle=bundle, groups=groups,
                        title=f'## Rules scored with {args.model.name} ({bundle.model_id})',
-                       audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=args.jobs)
+                       audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=args.jobs,
+                       load=args.load)
+
+
+def load_fields(args: argparse.Namespace) -> Optional[dict]:
+    """Return the load path's DecisionRule fields from the options (validated), or None."""
+    if args.load_threshold <= 0:
+        return None
+    fields = {name: getattr(args, name) for name in LOAD_FIELDS}
+    DecisionRule(**fields)          # ConfigError naming a bad value
+    return fields
 
 
 if __name__ == '__main__':

@@ -46,7 +46,7 @@ from contact_detector.cli.model_options import (add_augmentation_arguments,
                                                 add_feature_arguments, augmentation_from_args,
                                                 config_from_args, labels_from_args,
                                                 rule_from_args, tree_counts)
-from contact_detector.errors import ContactDetectorError
+from contact_detector.errors import ConfigError, ContactDetectorError
 from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
@@ -119,6 +119,9 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     config = config_from_args(args)
     labels = labels_from_args(args)
     rule = rule_from_args(args)
+    if rule.uses_load and not config.measures_carried:
+        raise ConfigError('--load-threshold needs the carried load: add a carried-load feature '
+                          '(e.g. force_shift_rel) to --extra-features, or --load-threshold 0')
     # An F/T-only model (--no-audio) trains on recordings without an audio topic too.
     found: dict[Path, Streams] = dict(discover_all(find_bags(args.bags), args=args, params={},
                                                    prog='contact-detector train',

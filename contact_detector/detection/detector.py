@@ -30,6 +30,7 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
 from contact_detector.features.carried import CarriedLoad
+from contact_detector.features.config import LOAD_FEATURE
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
@@ -236,12 +237,22 @@ class ContactDetector:
     def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
         self.bundle = bundle
         self.settings = settings
-        self.ft_only = bundle.feature_config.ft_only
-        self.rule = settings.rule or bundle.decision_rule
+        config = bundle.feature_config
+        self.ft_only = config.ft_only
+        # A model that measures the carried load also gets the distance of the force from it
+        # (force_carried_shift), the load path's input, computed by the same feature core; the
+        # forest reads only the model's own columns, the first n_model.
+        self._n_model = config.n_features
+        if config.measures_carried:
+            config = config.with_extra((LOAD_FEATURE,))
+            self._load_col: Optional[int] = config.feature_names.index(LOAD_FEATURE)
+        else:
+            self._load_col = None
+        self.rule = self.check_rule(settings.rule or bundle.decision_rule)
         try:
             self.forest = bundle.compile()
             self.extractor = StreamingFeatureExtractor(
-                config=bundle.feature_config, audio_rate=settings.audio_rate,
+                config=config, audio_rate=settings.audio_rate,
                 ft_input_rate=settings.wrench_rate, max_ft_age_s=settings.max_ft_age_s,
                 max_ft_wait_s=settings.max_ft_wait_s)
         except InputError as err:
@@ -300,9 +311,26 @@ class ContactDetector:
         return self.logic.armed
 
     def set_rule(self, rule: DecisionRule) -> None:
-        """Apply another decision rule from the next frame on (stream state and arming kept)."""
-        self.rule = rule
-        self.logic.rule = rule
+        """
+        Apply another decision rule from the next frame on (stream state and arming kept).
+
+        Raises
+        ------
+        ConfigError
+            The rule's load path is on and the model does not measure the carried load.
+
+        """
+        self.rule = self.check_rule(rule)
+        self.logic.rule = self.rule
+
+    def check_rule(self, rule: DecisionRule) -> DecisionRule:
+        """Return ``rule``; raise ConfigError if it needs a load the model cannot give."""
+        if rule.uses_load and self._load_col is None:
+            raise ConfigError(
+                f'the load path (load_threshold {rule.load_threshold:g} N) needs the carried '
+                f'load, which model {self.bundle.model_id} does not measure (it has no '
+                'carried-load feature); set release.load_threshold to 0')
+        return rule
 
     # --- input -----------------------------------------------------------------------------
 
@@ -468,13 +496,15 @@ class ContactDetector:
             valid &= ~stale
         p = np.zeros(n)
         if valid.any():
-            rows = frames.x[valid]
+            rows = frames.x[valid, :self._n_model]
             p[valid] = (self.forest.predict_proba(rows) if rows.shape[0] > 1
                         else self.forest.predict_one(rows[0]))
         if self._warm_until is None:
             self._warm_until = float(frames.t[0]) + self.settings.warmup_s
         blocked = (frames.t < self._warm_until) | (frames.t < self._holdoff_until)
-        contact, releases = self.logic.step(t=frames.t, p=p, valid=valid, blocked=blocked)
+        load = None if self._load_col is None else frames.x[:, self._load_col]
+        contact, releases = self.logic.step(t=frames.t, p=p, valid=valid, blocked=blocked,
+                                            load=load)
         self.counts['frames'] += n
         self.counts['invalid_frames'] += int(n - valid.sum())
         self.counts['events'] = self.logic.events
@@ -494,11 +524,12 @@ class ContactDetector:
         if now is not None and (now - t) > self.settings.max_input_delay_s:
             self.counts['stale_frames'] += 1
             valid = False
-        p = self.forest.predict_one(x) if valid else 0.0
+        p = self.forest.predict_one(x[:self._n_model]) if valid else 0.0
         if self._warm_until is None:
             self._warm_until = t + self.settings.warmup_s
         blocked = t < self._warm_until or t < self._holdoff_until
-        contact, releases = self.logic.step_one(t=t, p=p, ok=valid and not blocked)
+        load = 0.0 if self._load_col is None else float(x[self._load_col])
+        contact, releases = self.logic.step_one(t=t, p=p, ok=valid and not blocked, load=load)
         self.counts['frames'] += 1
         self.counts['invalid_frames'] += int(not valid)
         self.counts['events'] = self.logic.events

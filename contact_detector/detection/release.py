@@ -38,6 +38,10 @@ RULE_PARAMETERS = {
     'release.sustain_threshold': ('sustain_threshold', 0.0),
     'release.evidence_threshold': ('evidence_threshold', 0.0),
     'release.evidence_drift': ('evidence_drift', 0.0),
+    'release.load_threshold': ('load_threshold', 0.0),
+    'release.load_frames': ('load_frames', 1),
+    'release.load_support': ('load_support', 0.0),
+    'release.load_support_frames': ('load_support_frames', 1),
 }
 
 
@@ -86,12 +90,17 @@ class ReleaseLogic:
       or
     - ``rule.evidence_threshold > 0`` and the evidence ``S_i = max(0, S_{i-1} + p_i -
       rule.evidence_drift)`` accumulated over consecutive valid frames reaches
-      ``rule.evidence_threshold`` (a forest that is fairly sure for a few frames).
+      ``rule.evidence_threshold`` (a forest that is fairly sure for a few frames), or
+    - ``rule.load_threshold > 0`` (the load path) and the frame's ``load`` (the distance of
+      the force from the carried load, ``force_carried_shift``, N) has been
+      ``>= rule.load_threshold`` in the newest ``rule.load_frames`` consecutive frames, and
+      the mean P(contact) of the newest ``rule.load_support_frames`` frames is
+      ``>= rule.load_support``.
 
-    The means and the evidence need consecutive valid, unblocked frames: an invalid or
-    blocked frame empties the history and the evidence. A contact *event* starts when
-    ``rule.confirm_frames`` consecutive frames are contact and at least ``rule.refractory_s``
-    have passed since the previous event.
+    The means, the evidence and the load run need consecutive valid, unblocked frames: an
+    invalid or blocked frame empties the history, the evidence and the run. A contact *event*
+    starts when ``rule.confirm_frames`` consecutive frames are contact and at least
+    ``rule.refractory_s`` have passed since the previous event.
     An event releases only while armed, and a release disarms: at most one release per arming.
 
     Parameters
@@ -118,23 +127,30 @@ class ReleaseLogic:
         self._last_event_t = -math.inf
         self._recent.clear()
         self._evidence = 0.0
+        self._load_run = 0
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
         self.armed = bool(armed)
 
-    def _is_contact(self, p: float) -> bool:
-        """Push one valid frame's probability; return whether the frame is contact."""
+    def _is_contact(self, p: float, load: float) -> bool:
+        """Push one valid frame's probability and load; return whether it is contact."""
         rule = self.rule
         recent = self._recent
         recent.append(p)
-        while len(recent) > max(rule.average_frames, rule.sustain_frames):
+        while len(recent) > max(rule.average_frames, rule.sustain_frames,
+                                rule.load_support_frames if rule.uses_load else 0):
             recent.popleft()
         evidence = self._evidence + p - rule.evidence_drift
         self._evidence = evidence if evidence > 0.0 else 0.0
+        # not >= on the negation: a NaN load never counts
+        self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
             return True
         if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
+            return True
+        if rule.uses_load and self._load_run >= rule.load_frames \
+                and self._mean_of_last(rule.load_support_frames) >= rule.load_support:
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
@@ -149,7 +165,8 @@ class ReleaseLogic:
         return sum(islice(self._recent, n - k, n)) / k
 
     def step(self, *, t: np.ndarray, p: np.ndarray, valid: np.ndarray,
-             blocked: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:
+             blocked: Optional[np.ndarray] = None,
+             load: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:
         """
         Decide a block of frames.
 
@@ -163,6 +180,9 @@ class ReleaseLogic:
             Frames with fresh, sound input.
         blocked : np.ndarray, shape (n,), bool, optional
             Frames that may not count towards a release (warm-up, after corrupt input).
+        load : np.ndarray, shape (n,), optional
+            The distance of the force from the carried load per frame, N
+            (``force_carried_shift``); the load path's input. None: the load path never fires.
 
         Returns
         -------
@@ -180,13 +200,16 @@ class ReleaseLogic:
         contact = np.zeros(ok.shape[0], dtype=bool)
         releases = []
         self.last_events = []
-        for i, (ti, pi, oki) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
-                                              np.asarray(p, dtype=np.float64).tolist(),
-                                              ok.tolist())):
-            contact[i] = self._frame(ti, pi, oki, releases)
+        loads = (np.zeros(ok.shape[0]) if load is None
+                 else np.asarray(load, dtype=np.float64)).tolist()
+        for i, (ti, pi, oki, li) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
+                                                  np.asarray(p, dtype=np.float64).tolist(),
+                                                  ok.tolist(), loads)):
+            contact[i] = self._frame(ti, pi, oki, releases, li)
         return contact, releases
 
-    def step_one(self, *, t: float, p: float, ok: bool) -> tuple[bool, list]:
+    def step_one(self, *, t: float, p: float, ok: bool,
+                 load: float = 0.0) -> tuple[bool, list]:
         """
         Decide one frame: :meth:`step` for scalars.
 
@@ -198,6 +221,8 @@ class ReleaseLogic:
             P(contact).
         ok : bool
             Valid and not blocked.
+        load : float
+            The distance of the force from the carried load, N (:meth:`step`'s ``load``).
 
         Returns
         -------
@@ -208,16 +233,17 @@ class ReleaseLogic:
         """
         releases: list = []
         self.last_events = []
-        return self._frame(float(t), float(p), bool(ok), releases), releases
+        return self._frame(float(t), float(p), bool(ok), releases, float(load)), releases
 
-    def _frame(self, t: float, p: float, ok: bool, releases: list) -> bool:
+    def _frame(self, t: float, p: float, ok: bool, releases: list, load: float) -> bool:
         """Advance the state machine by one frame; return whether it is contact."""
         if not ok:
             self._recent.clear()
             self._evidence = 0.0
             self._run = 0
+            self._load_run = 0
             return False
-        if not self._is_contact(p):
+        if not self._is_contact(p, load):
             self._run = 0
             return False
         self._run += 1

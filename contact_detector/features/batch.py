@@ -25,9 +25,8 @@ import math
 from typing import Optional
 
 from contact_detector.features import spectral
-from contact_detector.features.config import (AUDIO_FEATURES, CARRIED_DERIVED,
-                                              CARRIED_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              HOLD_FEATURES, SHIFT_FEATURES)
+from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
+                                              HOLD_FEATURES, NEEDS_CARRIED, SHIFT_FEATURES)
 from contact_detector.features.deltas import LEVER_EPS
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
@@ -135,7 +134,7 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     n = config.ft_window
     need = (max(n, config.delta_lag + max(config.delta_window, config.baseline_window))
             if deltas else n)
-    carried_names = set(CARRIED_FEATURES) | set(CARRIED_DERIVED)
+    carried_names = set(NEEDS_CARRIED)
     # the vector shift's longer baseline only when a feature uses it: without one, the first
     # frames have too little history for it (its median would be of an empty slice)
     shifted = bool(set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names))
@@ -147,7 +146,7 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     carried = np.median(dec[:config.carried_window], axis=0) if n_blocks else np.zeros(6)
     floors = (config.carried_floor_force, config.carried_floor_torque)
     columns = FT_SPECTRAL_COLUMNS + tuple(deltas)
-    rows, times, changes, shifts = [], [], [], []
+    rows, times, changes, shifts, distances = [], [], [], [], []
     previous = [None, None]
     for end in range(need - 1, n_blocks, config.ft_hop):
         row = []
@@ -195,6 +194,13 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                 derived[f'{side}_carried_cos'] = min(1.0, max(-1.0, cos))
             derived['ft_carried_lever'] = math.log((derived['torque_shift_rel'] + LEVER_EPS)
                                                    / (derived['force_shift_rel'] + LEVER_EPS))
+            # the distance from the carried load, and its minimum over shift_min_frames frames
+            distances.append([math.sqrt(sum((new_v[a] - carried[a]) ** 2 for a in axes))
+                              for axes in ((0, 1, 2), (3, 4, 5))])
+            for k, side in enumerate(('force', 'torque')):
+                derived[f'{side}_carried_shift'] = distances[-1][k]
+                derived[f'{side}_carried_shift_min'] = min(
+                    d[k] for d in distances[-config.shift_min_frames:])
             for name, frames in (('min', config.shift_min_frames),
                                  ('max', config.change_max_frames)):
                 recent = shifts[-frames:]

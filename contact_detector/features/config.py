@@ -20,9 +20,9 @@ It is stored inside every model bundle; loading a model refuses a configuration 
 from the one the running code would use (see :mod:`contact_detector.model.storage`).
 """
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 import math
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from contact_detector.errors import ConfigError
 
@@ -86,6 +86,12 @@ PAPER_FEATURES = (
 #: the torque changed by the same fraction of the carried torque as the force of the carried
 #: force, as when the table takes the weight off under the object's centre of mass; a push
 #: nearer the sensor than the weight, or one with a sideways part, gives another value.
+#: ``*_carried_shift`` is ``|mean of the newest delta_window vectors - carried load|`` (N, N m):
+#: the whole change since the arming, which a slow transfer (a soft layer over 0.5 s) builds up
+#: and the sliding ``*_shift`` baseline forgets; ``*_carried_shift_min`` its minimum over the
+#: newest ``shift_min_frames`` F/T feature frames. Like the shifts, a length that does not
+#: depend on how the sensor is mounted; a constant bias cancels, as the carried load is read by
+#: the same sensor.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -115,6 +121,10 @@ EXTRA_FEATURES = (
     'force_carried_cos',
     'torque_carried_cos',
     'ft_carried_lever',
+    'force_carried_shift',
+    'torque_carried_shift',
+    'force_carried_shift_min',
+    'torque_carried_shift_min',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -128,7 +138,8 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
                   'force_shift_max', 'torque_shift_max', 'force_change_hold',
                   'torque_change_hold', 'force_shift_hold', 'torque_shift_hold',
                   'force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
-                  'torque_carried_cos', 'ft_carried_lever')
+                  'torque_carried_cos', 'ft_carried_lever', 'force_carried_shift',
+                  'torque_carried_shift', 'force_carried_shift_min', 'torque_carried_shift_min')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -151,6 +162,19 @@ CARRIED_FEATURES = ('force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
 
 #: The features computed from :data:`CARRIED_FEATURES` (they need the same carried load).
 CARRIED_DERIVED = ('ft_carried_lever',)
+
+#: The distance of the force (torque) vector from the load carried after a start or an arming,
+#: and its smallest value over the newest ``shift_min_frames`` F/T feature frames: the whole
+#: load transfer since the arming, however slowly it came (a guard's ``|F - F_rest|``).
+CARRIED_SHIFT_FEATURES = ('force_carried_shift', 'torque_carried_shift',
+                          'force_carried_shift_min', 'torque_carried_shift_min')
+
+#: Every feature that needs the carried load (measured after a start or an arming).
+NEEDS_CARRIED = CARRIED_FEATURES + CARRIED_DERIVED + CARRIED_SHIFT_FEATURES
+
+#: The column the load path of a decision rule reads: the distance of the force from the
+#: carried load, N.
+LOAD_FEATURE = 'force_carried_shift'
 
 #: :attr:`FeatureConfig.carried_window`, ``carried_floor_force`` and ``carried_floor_torque``
 #: when not given: left out of :meth:`FeatureConfig.to_dict` like ``hold_frames``. 50 samples
@@ -365,6 +389,23 @@ class FeatureConfig:
         """Names of the feature vector's columns, in order (no ``audio_power`` if F/T-only)."""
         paper = PAPER_FEATURES if self.audio else PAPER_FEATURES[1:]
         return paper + self.extra_features
+
+    @property
+    def measures_carried(self) -> bool:
+        """Return True when a column needs the carried load (:data:`NEEDS_CARRIED`)."""
+        return any(name in NEEDS_CARRIED for name in self.extra_features)
+
+    def with_extra(self, names: Sequence[str]) -> 'FeatureConfig':
+        """
+        Return this configuration with the extra features ``names`` appended where missing.
+
+        The columns of ``self`` keep their places, first; the added ones follow in the order
+        given. The detector computes a column the release rule reads (``force_carried_shift``,
+        the load path of :class:`~contact_detector.model.rule.DecisionRule`) this way, without
+        handing it to a forest that was not trained with it.
+        """
+        added = tuple(name for name in names if name not in self.extra_features)
+        return replace(self, extra_features=self.extra_features + added) if added else self
 
     @property
     def n_features(self) -> int:

@@ -28,9 +28,9 @@ from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
 from contact_detector.features.carried import CarriedLoad, measure_carried_load
-from contact_detector.features.config import (CARRIED_DERIVED, CARRIED_FEATURES, CHANGE_FEATURES,
+from contact_detector.features.config import (CARRIED_SHIFT_FEATURES, CHANGE_FEATURES,
                                               DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
-                                              PAPER_FEATURES, SHIFT_FEATURES)
+                                              NEEDS_CARRIED, PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.deltas import (carried_lever, relative_to_carried, vector_shift,
                                               window_mean, window_median, with_angle)
 from contact_detector.features.frames import TimeJumpError
@@ -86,12 +86,11 @@ class ForceTorqueStream:
         # the *_hold features hold both the changes and the shifts; the carried-load features
         # compare the vector change with the load measured over the first carried_window
         # samples, which every frame after a start must have
-        carried = set(CARRIED_FEATURES) | set(CARRIED_DERIVED)
-        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried
+        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(NEEDS_CARRIED)
         if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
         #: Whether the features use the carried load (then it is measured, else never).
-        self.uses_carried = bool(set(self.use_delta) & carried)
+        self.uses_carried = config.measures_carried
         if self.uses_carried:
             need = max(need, config.carried_window)
         self.first_end = need - 1
@@ -110,6 +109,11 @@ class ForceTorqueStream:
         # (change, shift) of |F| and |T| of the frames before the newest, for *_hold.
         self._want_hold = bool(wanted & set(HOLD_FEATURES))
         self._recent_holds = TailBuffer(capacity=config.hold_frames, width=4)
+        # (force, torque) distance from the carried load of the frames before the newest, for
+        # *_carried_shift_min
+        self._want_carried_shift = bool(wanted & set(CARRIED_SHIFT_FEATURES))
+        self._want_carried_min = bool(wanted & set(CARRIED_SHIFT_FEATURES[2:]))
+        self._recent_carried_shifts = TailBuffer(capacity=config.shift_min_frames, width=2)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
                                             ('ft_change_angle', 'force_change', 'torque_change'))
                         if angle[0] in wanted]
@@ -156,6 +160,7 @@ class ForceTorqueStream:
         self._vecs.clear()
         self._recent_shifts.clear()
         self._recent_holds.clear()
+        self._recent_carried_shifts.clear()
         # a measurement that completes from now on applies from its sample on
         self._previous_carried: Optional[np.ndarray] = None
         self._carried_from = 0
@@ -271,6 +276,15 @@ class ForceTorqueStream:
         self._recent_shifts.extend(shift)
         self._recent_shifts.keep_last(max(k_min, k_max) - 1)
         return low, high
+
+    def _carried_shift_min(self, distance: np.ndarray) -> np.ndarray:
+        # *_carried_shift_min of the (m, 2) new distances; keeps the newest for the next call
+        window = self.config.shift_min_frames
+        low = -running_max(values=-distance, before=-self._recent_carried_shifts.view,
+                           window=window)
+        self._recent_carried_shifts.extend(distance)
+        self._recent_carried_shifts.keep_last(window - 1)
+        return low
 
     def _held(self, values: np.ndarray) -> np.ndarray:
         # *_change_hold (columns 0, 1) and *_shift_hold (2, 3) of the (m, 4) new changes and
@@ -398,12 +412,21 @@ class ForceTorqueStream:
                 change_v = recent_v - base_v
                 shift = vector_shift(change=change_v)
                 if self.uses_carried:
+                    carried = self._carried_per_frame(ends)
                     rel, cos = relative_to_carried(change=change_v, shift=shift,
-                                                   carried=self._carried_per_frame(ends),
-                                                   floor=self._floor)
+                                                   carried=carried, floor=self._floor)
                     derived['force_shift_rel'], derived['torque_shift_rel'] = rel.T
                     derived['force_carried_cos'], derived['torque_carried_cos'] = cos.T
                     derived['ft_carried_lever'] = carried_lever(rel=rel)
+                    if self._want_carried_shift:
+                        # the same length as the shift's, against the carried load
+                        distance = vector_shift(change=recent_v - carried)
+                        derived['force_carried_shift'], derived['torque_carried_shift'] = \
+                            distance.T
+                        if self._want_carried_min:
+                            low_c = self._carried_shift_min(distance)
+                            derived['force_carried_shift_min'], \
+                                derived['torque_carried_shift_min'] = low_c.T
                 low, high = self._shift_extremes(shift)
                 derived['force_shift'], derived['torque_shift'] = shift.T
                 derived['force_shift_min'], derived['torque_shift_min'] = low.T

@@ -29,6 +29,10 @@ from contact_detector.errors import ConfigError
 import numpy as np
 
 
+#: The load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
+LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_frames')
+
+
 @dataclass(frozen=True)
 class DecisionRule:
     """
@@ -52,6 +56,17 @@ class DecisionRule:
         consecutive valid frames, contact when ``S_i >= evidence_threshold`` (0 = off). A
         forest that is only 0.6-0.9 sure for a few frames accumulates evidence, while frames
         below ``evidence_drift`` take it away again.
+    load_threshold, load_frames : float, int
+        Load path (0 N = off): contact when the force has stayed at least ``load_threshold``
+        N away from the load carried after the start or the arming (``force_carried_shift``,
+        the distance of a guard ``|F - F_rest|``) for the newest ``load_frames`` consecutive
+        frames, and the forest backs it (``load_support``). The whole load transfer since the
+        arming, however slowly it came: a soft surface or a fixture that the forest, trained
+        on the simulator's contacts, is only 0.2-0.6 sure of.
+    load_support, load_support_frames : float, int
+        The backing the load path needs: the mean P(contact) of the newest
+        ``load_support_frames`` frames ``>= load_support``. A knock on the hand does not hold
+        the load away for ``load_frames``; a push that does, the forest calls no contact.
 
     """
 
@@ -63,20 +78,26 @@ class DecisionRule:
     sustain_threshold: float = 0.5
     evidence_threshold: float = 0.0
     evidence_drift: float = 0.5
+    load_threshold: float = 0.0
+    load_frames: int = 20
+    load_support: float = 0.15
+    load_support_frames: int = 25
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
         for name, low, high in (('threshold', 0.0, 1.0), ('refractory_s', 0.0, math.inf),
                                 ('sustain_threshold', 0.0, 1.0),
                                 ('evidence_threshold', 0.0, 1000.0),
-                                ('evidence_drift', 0.0, 1.0)):
+                                ('evidence_drift', 0.0, 1.0),
+                                ('load_threshold', 0.0, 1000.0), ('load_support', 0.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
                 raise ConfigError(f'DecisionRule.{name} must be a finite number in '
                                   f'[{low}, {high}], got {value!r}')
             object.__setattr__(self, name, float(value))
-        for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0)):
+        for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0),
+                          ('load_frames', 1), ('load_support_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
                     or value < low:
@@ -95,6 +116,10 @@ class DecisionRule:
         if self.evidence_threshold > 0:
             text += (f' evidence_threshold={self.evidence_threshold:.3f} '
                      f'evidence_drift={self.evidence_drift:.3f}')
+        if self.load_threshold > 0:
+            text += (f' load_threshold={self.load_threshold:.3f} load_frames={self.load_frames}'
+                     f' load_support={self.load_support:.3f}'
+                     f' load_support_frames={self.load_support_frames}')
         return text
 
     def short(self) -> str:
@@ -106,11 +131,28 @@ class DecisionRule:
             text += f' or mean{self.sustain_frames}>={self.sustain_threshold:g}'
         if self.evidence_threshold > 0:
             text += f' or sum(p-{self.evidence_drift:g})>={self.evidence_threshold:g}'
+        if self.load_threshold > 0:
+            text += (f' or load>={self.load_threshold:g}N x{self.load_frames}'
+                     f' & mean{self.load_support_frames}>={self.load_support:g}')
         return text
 
+    @property
+    def uses_load(self) -> bool:
+        """Return True when the load path is on (it needs ``force_carried_shift`` per frame)."""
+        return self.load_threshold > 0
+
     def to_dict(self) -> dict:
-        """Plain-JSON form, stored in bundles and cards."""
-        return dataclasses.asdict(self)
+        """
+        Plain-JSON form, stored in bundles and cards.
+
+        The load path's fields are written only when it is on, so the rules of models written
+        before it existed are stored as they were.
+        """
+        data = dataclasses.asdict(self)
+        if not self.uses_load:
+            for name in LOAD_FIELDS:
+                del data[name]
+        return data
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> 'DecisionRule':

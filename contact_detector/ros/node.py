@@ -618,13 +618,20 @@ class DetectorWiring(DiagnosticsMixin):
         values.update(mine)
         try:
             candidate = config_from_values(values)
-            if self.bundle is not None:         # None: a managed node not configured yet
-                candidate.rule(self.bundle.decision_rule)
+            if self.detector is not None:       # None: a managed node not configured yet
+                for det, bundle in self._rule_targets():
+                    det.check_rule(candidate.rule(bundle.decision_rule))
         except ConfigError as err:
             self.get_logger().warning(f'parameter update refused: {err}')
             return SetParametersResult(successful=False, reason=str(err))
         self._pending = candidate
         return SetParametersResult(successful=True)
+
+    def _rule_targets(self) -> list:
+        """Return the (detector, bundle) pairs whose rules the release parameters set."""
+        if isinstance(self.detector, AudioFallback):
+            return [(self.detector.primary, self.bundle), (self.detector.fallback, self.ft_bundle)]
+        return [(self.detector, self.bundle)]
 
     def _apply_parameters(self, params: list) -> None:
         new, self._pending = self._pending, None
@@ -632,9 +639,7 @@ class DetectorWiring(DiagnosticsMixin):
                 or self.bundle is None:         # configure reads the parameters
             return
         old, self.config = self.config, new
-        pairs = ([(self.detector.primary, self.bundle), (self.detector.fallback, self.ft_bundle)]
-                 if isinstance(self.detector, AudioFallback) else [(self.detector, self.bundle)])
-        for det, bundle in pairs:
+        for det, bundle in self._rule_targets():
             det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
                                    warmup_s=new.warmup_s,
                                    corrupt_holdoff_s=new.corrupt_holdoff_s,

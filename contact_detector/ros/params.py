@@ -168,6 +168,18 @@ PARAMS: Sequence[ParamSpec] = (
               -1.0, 1000.0, read_only=False),
     ParamSpec('release.evidence_drift', -1.0, 'What each frame subtracts from the evidence; '
               'negative = the decision rule of the model.', -1.0, 1.0, read_only=False),
+    ParamSpec('release.load_threshold', -1.0, 'Load path: a frame is also contact when the '
+              'force has stayed this far from the load carried at the start or arming for '
+              'release.load_frames frames and the mean P(contact) of '
+              'release.load_support_frames frames >= release.load_support, N (0 = off; needs '
+              'a model with carried-load features); negative = the decision rule of the model.',
+              -1.0, 1000.0, read_only=False),
+    ParamSpec('release.load_frames', 0, 'Frames the load path needs the force away from the '
+              'carried load; 0 = the decision rule of the model.', 0, 1000, read_only=False),
+    ParamSpec('release.load_support', -1.0, 'Mean P(contact) the load path needs; negative = '
+              'the decision rule of the model.', -1.0, 1.0, read_only=False),
+    ParamSpec('release.load_support_frames', 0, 'Frames of that mean; 0 = the decision rule '
+              'of the model.', 0, 1000, read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',

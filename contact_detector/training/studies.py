@@ -23,12 +23,13 @@ compares and how its table reads.
 """
 
 from dataclasses import replace
-from typing import Callable, Dict, Iterable, List, Optional, Sequence
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.metrics import premature_text, summarize
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.features.config import CARRIED_FEATURES, EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import (CARRIED_FEATURES, CARRIED_SHIFT_FEATURES,
+                                              EXTRA_FEATURES, FeatureConfig)
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
@@ -94,6 +95,12 @@ LOFO_SETTINGS = {
     # a slow transfer's click is then still in view while its load moves (issue #14)
     'peak30': tuple(DEFAULT_FEATURES.feature_names),
     'peak20': tuple(DEFAULT_FEATURES.feature_names),
+    # the shipped columns (the F/T-only model's) and the distance from the carried load with
+    # its recent minimum: the whole transfer since the arming, however slowly it came (a
+    # guard's |F - F_rest|; issue #14)
+    'cshift': tuple(DEFAULT_FEATURES.feature_names) + CARRIED_SHIFT_FEATURES,
+    'ft-only+signed+carried+cshift': (_SPECTRAL + _SHIFT + _SIGNED + CARRIED_FEATURES
+                                      + CARRIED_SHIFT_FEATURES),
 }
 #: The settings of :data:`LOFO_SETTINGS` whose features are computed with other
 #: :class:`~contact_detector.features.config.FeatureConfig` fields: name -> the fields changed
@@ -265,6 +272,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                augmentation: WrenchAugmentation = STUDY_AUGMENTATION,
                seeds: Sequence[int] = (), min_samples_leaf: int = 1,
                families: Optional[Sequence[str]] = None,
+               load: Optional[Dict[str, Any]] = None,
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
     Leave-one-family-out over the pooled trials; per setting and rule the worst family.
@@ -286,7 +294,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     event (:class:`~.protocol.LabelWindow`).
     ``families`` leaves only those families out in turn (every forest still trains on all the
     others; default: every family, the figure to choose by); a name no trial has raises
-    ConfigError. Returns markdown.
+    ConfigError. ``load`` (the load path's :class:`DecisionRule` fields) adds the shipped rule
+    with that load path, second after the shipped rule. Returns markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
     present = {events_truth[1].condition for events_truth in trials.values()}
@@ -305,6 +314,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
         return cache[config, augmented]
 
     rules = lofo_rules()
+    if load:
+        rules[1:1] = [replace(DEFAULT_RULE, **load)]
     worst_lines = ['| setting | rule | worst family | detected | premature (after) | '
                    'median [ms] | p95 [ms] | all families: detected / premature | '
                    'knocked on the hand, all families: detected / premature / median [ms] |',
@@ -417,13 +428,18 @@ def ablation_study(*, trials: Dict[str, tuple], sustain: Sequence[float], seeds:
 
 
 def model_study(*, bundle: ModelBundle, groups: Sequence[tuple], title: str,
-                audio_rate: float, wrench_rate: float, jobs: int) -> str:
+                audio_rate: float, wrench_rate: float, jobs: int,
+                load: Optional[Dict[str, Any]] = None) -> str:
     """
     Score :func:`model_rules` with a trained model on groups of trials; return markdown.
 
-    ``groups``: ``(name, trials)`` pairs, ``trials`` from :func:`decode_bags`.
+    ``groups``: ``(name, trials)`` pairs, ``trials`` from :func:`decode_bags`. ``load`` (the
+    load path's :class:`DecisionRule` fields) adds the model's rule with that load path, second.
     """
     rules = model_rules(bundle.decision_rule)
+    if load:
+        rules.insert(1, replace(bundle.decision_rule, **load))
+        rules = list(dict.fromkeys(rules))
     text = [title, '']
     for name, trials in groups:
         if trials:

@@ -392,6 +392,33 @@ def test_parameters_at_run_time(harness_factory):
     assert set_('release.average_frames', 0).successful
     assert (node.detector.rule.sustain_frames, node.detector.rule.average_frames) == (
         base.sustain_frames, base.average_frames)
+    # The load path on the shipped model (it measures the carried load), and off again.
+    assert not set_('release.load_support', 2.0).successful
+    assert set_('release.load_threshold', 2.0).successful
+    assert set_('release.load_frames', 15).successful
+    rule = node.detector.rule
+    assert rule.uses_load and (rule.load_threshold, rule.load_frames) == (2.0, 15)
+    assert node.detector.logic.rule == rule
+    assert set_('release.load_threshold', 0.0).successful
+    assert not node.detector.rule.uses_load
+
+
+def test_the_load_path_needs_a_model_that_measures_the_carried_load(context, tmp_path):
+    # the small test model has the paper's features only: no carried load to hold the force
+    # against, so the load path is refused at start and at run time, with the reason
+    plain = node_support.model_path(tmp_path, allow_shipped=False)
+    with pytest.raises(ConfigError, match='carried'):
+        ContactDetectorNode(context=context, parameter_overrides=[
+            Parameter('model.path', value=str(plain)),
+            Parameter('release.load_threshold', value=2.0)])
+    node = ContactDetectorNode(context=context, parameter_overrides=[
+        Parameter('model.path', value=str(plain))])
+    try:
+        result = node.set_parameters([Parameter('release.load_threshold', value=2.0)])[0]
+        assert not result.successful and 'carried' in result.reason
+        assert not node.detector.rule.uses_load
+    finally:
+        node.destroy_node()
 
 
 def test_stream_rate_change_rebuilds_the_detector(harness_factory, trial):

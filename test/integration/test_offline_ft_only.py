@@ -118,6 +118,8 @@ def test_train_no_audio_writes_an_ft_only_model(no_audio, tmp_path, capsys):
     # onset, every frame weighing the same, a tare on half the trials, lever arms x1/3-3
     assert bundle.label_window == shipped.label_window == {'start_s': 0.03, 'end_s': 0.3}
     assert bundle.training['augmentation'] == shipped.training['augmentation']
+    # and its rule, the load path included
+    assert bundle.decision_rule == shipped.decision_rule and bundle.decision_rule.uses_load
     out = tmp_path / 'd.jsonl'
     assert cli_main.main(['detect', str(no_audio / 'trial_0002'), '--model', str(model),
                           '--out', str(out)]) == 0
@@ -129,9 +131,10 @@ def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path
     assert cli_main.main(['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1',
                           '--trees', '1', '--augment', '--label-start', '0',
                           '--event-weight', '2', '--augment-tare', '0.1',
-                          '--out', str(model)]) == 0
+                          '--load-threshold', '0', '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     assert bundle.label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 2.0}
+    assert not bundle.decision_rule.uses_load
     assert bundle.training['augmentation']['tare_probability'] == 0.1
     assert bundle.training['augmentation']['torque_scale'] == [0.333, 3.0]
 
@@ -154,8 +157,8 @@ def test_sweep_scores_the_ft_model_on_recordings_without_audio(no_audio, tmp_pat
     assert cli_main.main(['sweep', str(no_audio), '--model', str(default_ft_model_path()),
                           '--out', str(out), '--jobs', '1']) == 0
     assert 'no audio topic' in capsys.readouterr().out
-    shipped = next(line for line in out.read_text().splitlines()
-                   if '| p>=0.95 x1 or mean15>=0.4 |' in line)
+    own = load_bundle(path=default_ft_model_path()).decision_rule.short()
+    shipped = next(line for line in out.read_text().splitlines() if f'| {own} |' in line)
     cells = [cell.strip() for cell in shipped.strip('|').split('|')]
     detected, premature = cells[2], cells[4]    # the model decided every trial, none early
     assert detected.endswith(f'/{N_TRIALS}') and int(detected.split('/')[0]) >= N_TRIALS - 1

@@ -128,6 +128,30 @@ def test_knocks_scores_the_trials_knocked_on_the_hand_in_the_air(data, tmp_path,
     capsys.readouterr()
 
 
+def test_the_load_path_is_scored_beside_the_model_rule(data, tmp_path, capsys):
+    # the model's rule with the load path comes second; a lower load threshold held as long
+    # fires at the same frame or sooner, so it releases on at least as many trials
+    def rows(threshold):
+        out = tmp_path / f'load{threshold}.md'
+        assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--jobs', '1',
+                               '--load-threshold', str(threshold), '--load-frames', '5',
+                               '--load-support', '0', '--out', str(out)]) == 0
+        return _table(out.read_text())
+    bundle = load_bundle(path=data['model'])
+    low, high = rows(0.5), rows(3.0)
+    assert low[1][1] == bundle.decision_rule.short() + ' or load>=0.5N x5 & mean25>=0'
+    assert low[0][1] == high[0][1] == bundle.decision_rule.short()
+    assert low[0][2:] == high[0][2:]                       # the model's own rule: unchanged
+
+    def fired(row):
+        return int(row[2].split('/')[0]) + int(row[4])
+    assert fired(low[1]) >= fired(high[1]) >= fired(low[0])
+    with pytest.raises(SystemExit):
+        sweep_cli.main([str(data['bags']), '--model', str(data['model']),
+                        '--load-threshold', '2', '--load-support', '2'])
+    assert 'load_support' in capsys.readouterr().err
+
+
 def test_own_test_needs_a_model(data, capsys):
     with pytest.raises(SystemExit):
         sweep_cli.main([str(data['bags']), '--own-test', str(data['bags'])])

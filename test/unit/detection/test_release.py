@@ -23,7 +23,7 @@ import pytest
 HOP = 0.01
 
 
-def _run(rule, p, *, valid=None, pieces=None, armed=True):
+def _run(rule, p, *, valid=None, pieces=None, armed=True, load=None):
     """Feed ``p`` (one frame per 10 ms) in one call, or cut at the indices in ``pieces``."""
     p = np.asarray(p, dtype=float)
     t = np.arange(p.size) * HOP
@@ -32,7 +32,8 @@ def _run(rule, p, *, valid=None, pieces=None, armed=True):
     cuts = [0, *(pieces or []), p.size]
     contact, releases, events = [], [], []
     for a, b in zip(cuts, cuts[1:]):
-        c, r = logic.step(t=t[a:b], p=p[a:b], valid=valid[a:b])
+        c, r = logic.step(t=t[a:b], p=p[a:b], valid=valid[a:b],
+                          load=None if load is None else np.asarray(load, float)[a:b])
         contact.append(c)
         releases += r
         events += logic.last_events
@@ -104,7 +105,9 @@ def test_node_parameters_to_rule_overrides():
     unset = {'release.threshold': -1.0, 'release.confirm_frames': 0,
              'release.refractory_s': -1.0, 'release.average_frames': 0,
              'release.sustain_frames': -1, 'release.sustain_threshold': -1.0,
-             'release.evidence_threshold': -1.0, 'release.evidence_drift': -1.0}
+             'release.evidence_threshold': -1.0, 'release.evidence_drift': -1.0,
+             'release.load_threshold': -1.0, 'release.load_frames': 0,
+             'release.load_support': -1.0, 'release.load_support_frames': 0}
     assert rule_overrides(unset) == {} and rule_overrides({}) == {}
     # ... and 0 turns the slow path off, while 0 confirm frames means "the model's".
     assert rule_overrides({**unset, 'release.sustain_frames': 0, 'release.threshold': 0.9}) == {
@@ -147,3 +150,52 @@ def replace_rule(rule, **changes):
     """dataclasses.replace for a frozen DecisionRule."""
     from dataclasses import replace
     return replace(rule, **changes)
+
+
+LOAD_RULE = DecisionRule(threshold=0.95, sustain_frames=15, sustain_threshold=0.4,
+                         load_threshold=2.0, load_frames=5, load_support=0.15,
+                         load_support_frames=8)
+
+
+def test_load_path_releases_a_held_load_change_the_forest_backs():
+    # a forest 0.2-sure (neither 0.95 nor a mean of 0.4) while the force stays 2.5 N from the
+    # carried load: the load path fires at the 5th frame held, once the 8-frame mean is there
+    p = [0.2] * 20
+    load = [0.0] * 6 + [2.5] * 14
+    contact, releases, _ = _run(LOAD_RULE, p, load=load)
+    assert releases == [pytest.approx(10 * HOP)]
+    assert contact.tolist() == [False] * 10 + [True] * 10
+    # the same frame by frame, and without the load path nothing at all
+    assert _run(LOAD_RULE, p, load=load, pieces=list(range(1, 20)))[1] == releases
+    assert _run(replace_rule(LOAD_RULE, load_threshold=0.0), p, load=load)[1] == []
+    assert _run(LOAD_RULE, p)[1] == []                   # no load given: the path is idle
+
+
+def test_load_path_needs_the_load_held_and_the_forest_behind_it():
+    p = [0.2] * 20
+    # a knock: 4 frames over the threshold, then back (a fresh run of 5 is needed)
+    knock = [0.0] * 6 + [9.0] * 4 + [1.0] + [9.0] * 4 + [0.0] * 5
+    assert _run(LOAD_RULE, p, load=knock)[1] == []
+    # a push the forest calls no contact (mean P(contact) 0.1 < 0.15)
+    assert _run(LOAD_RULE, [0.1] * 20, load=[3.0] * 20)[1] == []
+    # just under the threshold, and a NaN load, never count
+    assert _run(LOAD_RULE, p, load=[1.99] * 20)[1] == []
+    assert _run(LOAD_RULE, p, load=[float('nan')] * 20)[1] == []
+    # an invalid frame restarts the run and the mean: 8 frames after it, not at frame 7
+    assert _run(LOAD_RULE, p, load=[3.0] * 20)[1] == [pytest.approx(7 * HOP)]
+    valid = [True] * 5 + [False] + [True] * 14
+    assert _run(LOAD_RULE, p, load=[3.0] * 20, valid=valid)[1] == [pytest.approx(13 * HOP)]
+
+
+def test_load_path_rule_fields():
+    assert LOAD_RULE.short() == 'p>=0.95 x1 or mean15>=0.4 or load>=2N x5 & mean8>=0.15'
+    assert LOAD_RULE.uses_load and not DecisionRule().uses_load
+    # written only when on, so rules stored before the path existed are stored as they were
+    assert 'load_threshold' not in DecisionRule().to_dict()
+    assert DecisionRule.from_dict(LOAD_RULE.to_dict()) == LOAD_RULE
+    assert rule_overrides({'release.load_threshold': 0.0, 'release.load_frames': 0}) == {
+        'load_threshold': 0.0}
+    for bad in ({'load_threshold': -1.0}, {'load_frames': 0}, {'load_support': 1.5},
+                {'load_support_frames': 0}, {'load_threshold': float('nan')}):
+        with pytest.raises(ConfigError, match=next(iter(bad))):
+            DecisionRule(**bad)

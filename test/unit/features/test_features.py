@@ -419,6 +419,65 @@ def test_carried_cosine_tells_a_lasting_unload_from_a_lateral_push():
     assert all(seen[k][2] == pytest.approx(0.5) for k in seen)
 
 
+CARRIED_SHIFT_CONFIG = FeatureConfig(
+    extra_features=('force_shift', 'force_carried_shift', 'torque_carried_shift',
+                    'force_carried_shift_min', 'torque_carried_shift_min'),
+    delta_window=1, shift_min_frames=10)
+
+
+def _carried_shift_features(force, torque):
+    """Per frame (keyed by sample index): force_shift and the four *_carried_shift columns."""
+    stream = ForceTorqueStream(config=CARRIED_SHIFT_CONFIG, input_rate=100.0)
+    ft, x = stream.push(t=T0 + np.arange(force.shape[0]) / 100, force=force, torque=torque)
+    return dict(zip(np.round((ft - T0) * 100).astype(int).tolist(), x[:, -5:].tolist()))
+
+
+def test_carried_shift_keeps_a_slow_transfer_the_sliding_shift_forgets():
+    # a soft layer takes 4 N of a 6 N weight over 1 s, linearly from sample 100: the sliding
+    # shift compares with a baseline 0.2-0.6 s back and sees only part of it, the distance
+    # from the carried load sees all of it, for the force and its torque (0.15 m) alike
+    n = 260
+    force, torque = _carried_load(n)
+    force[100:, 0] += np.minimum(np.arange(n - 100) / 100, 1.0) * 4.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    got = _carried_shift_features(force, torque)
+    assert got[99][1:] == [0.0] * 4                          # nothing moved yet
+    assert got[200][1] == pytest.approx(4.0)                 # force_carried_shift
+    assert got[200][2] == pytest.approx(0.6)                 # torque_carried_shift
+    assert got[200][3] == pytest.approx(3.64)                # its minimum: 10 frames back
+    assert got[200][0] < 2.0                                 # the sliding shift: part of it
+    assert got[259][0] == pytest.approx(0.0) and got[259][1] == pytest.approx(4.0)
+
+
+def test_carried_shift_does_not_depend_on_sensor_orientation_or_bias():
+    # any rotation of the sensor frame, and a constant bias (the carried load is read by the
+    # same sensor), leave the distance from the carried load as it was
+    n = 140
+    force, torque = _carried_load(n)
+    force[80:, 0] += 3.0
+    torque = np.cross([0.0, 0.0, 0.15], force)
+    ref = _carried_shift_features(force, torque)
+    assert ref[100][1:] == pytest.approx([3.0, 0.45, 3.0, 0.45])
+    for seed in range(3):
+        rot = _random_rotation(seed)
+        bias = np.random.default_rng(seed).normal(scale=5.0, size=6)
+        got = _carried_shift_features(force @ rot.T + bias[:3], torque @ rot.T + bias[3:])
+        for k in ref:
+            np.testing.assert_allclose(got[k], ref[k], atol=1e-9)
+
+
+def test_carried_shift_min_tells_a_lasting_transfer_from_a_knock():
+    # the 20 ms knock of 8 N that rings back, against the 3 N touch: both are far from the
+    # carried load while they last; 10 frames later only the touch is
+    n = 160
+    knock, touch = _knock_and_touch(n)
+    zero = np.zeros((n, 3))
+    at, bt = _carried_shift_features(knock, zero), _carried_shift_features(touch, zero)
+    assert at[81][1] == pytest.approx(8.0) and bt[81][1] == pytest.approx(3.0)
+    assert at[92][3] == pytest.approx(0.0)                   # the knock did not last
+    assert bt[92][3] == pytest.approx(3.0)                   # the touch did
+
+
 def test_carried_load_is_measured_at_the_start_and_again_on_arming_not_after_a_gap():
     # 6 N carried at the start, then 10 N (another object) from 1 s on, a 0.2 s wrench gap at
     # 1.5 s, an arming at 2 s and the table taking 2 N at 2.15 s: the gap restarts the window
@@ -524,6 +583,8 @@ configs = st.builds(
         ('force_carried_cos', 'torque_shift_rel'), ('force_shift_rel', 'torque_carried_cos'),
         ('ft_carried_lever',), ('force_shift', 'ft_carried_lever', 'torque_carried_cos'),
         ('audio_hold_db',), ('audio_peak_rel_db', 'audio_hold_db', 'force_shift'),
+        ('force_carried_shift', 'torque_carried_shift_min'),
+        ('torque_carried_shift', 'force_carried_shift_min', 'force_shift_rel'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),

@@ -14,6 +14,8 @@
 
 """The named feature presets, the shipped models' location without ROS, and train's defaults."""
 
+from dataclasses import replace
+
 from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, PAPER_FEATURES
 from contact_detector.model.shipped import default_ft_model_path, default_model_path, model_dirs
 from contact_detector.model.storage import load_bundle
@@ -23,7 +25,8 @@ from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import (DEFAULT_AUGMENTATION, DEFAULT_FEATURES,
                                               DEFAULT_FT_ONLY_AUGMENTATION,
                                               DEFAULT_FT_ONLY_EXTRA, DEFAULT_FT_ONLY_LABELS,
-                                              DEFAULT_LABELS)
+                                              DEFAULT_FT_ONLY_RULE, DEFAULT_LABELS,
+                                              DEFAULT_RULE)
 from contact_detector.training.studies import LOFO_SETTINGS
 
 
@@ -95,6 +98,11 @@ def test_shipped_ft_model_releases_by_the_rule_it_was_chosen_with() -> None:
     # frames >= 0.4 (tools/build_ft_model.sh; p >= 0.9 released early more often on fresh
     # trials); the multimodal model's slow path is 0.4 too
     # (docs/decisions/2026-11-24-lever-arm-augmentation.md, candidate D)
+    # and the load path on top (docs/decisions/2026-11-28-ft-only-load-path.md), which the
+    # multimodal model does without; both are train's defaults for their kind
     rule = load_bundle(path=default_ft_model_path()).decision_rule
-    assert rule.short() == 'p>=0.95 x1 or mean15>=0.4'
-    assert load_bundle(path=default_model_path()).decision_rule.short() == rule.short()
+    assert rule.short() == 'p>=0.95 x1 or mean15>=0.4 or load>=2N x20 & mean25>=0.15'
+    assert rule == DEFAULT_FT_ONLY_RULE
+    multimodal = load_bundle(path=default_model_path()).decision_rule
+    assert multimodal == DEFAULT_RULE and multimodal.short() == 'p>=0.95 x1 or mean15>=0.4'
+    assert replace(rule, load_threshold=0.0) == multimodal

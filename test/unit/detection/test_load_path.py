@@ -1,0 +1,114 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The load path in the detector: a slow, held load transfer the forest does not catch.
+
+The toy F/T-only forest of ``test_carried.py`` says contact only when the force change over its
+sliding baseline lasted above 1 N against the carried load. The table taking 3 N over 1.5 s
+(a soft layer) never moves the load that fast, so the forest never fires; the load path, the
+force held 2 N from the load carried after the start, does. The detector computes that distance
+beside the model's columns and gives the forest only its own.
+"""
+
+from dataclasses import replace
+
+from bundle_support import toy_bundle
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.offline import run_detector
+from contact_detector.errors import ConfigError, ModelError
+from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, SHIFT_FEATURES
+from contact_detector.io.sensor_stream import WrenchEvent
+from contact_detector.model.bundle import ModelBundle
+import numpy as np
+import pytest
+
+CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
+                       extra_features=SHIFT_FEATURES + CARRIED_FEATURES)
+RATE = 100.0
+T0 = 1_700_000_000.0
+START_S = 3.0
+LOAD = {'load_threshold': 2.0, 'load_frames': 20, 'load_support': 0.0, 'load_support_frames': 25}
+
+
+def _bundle(config: FeatureConfig) -> ModelBundle:
+    rng = np.random.default_rng(0)
+    x = np.abs(rng.normal(size=(4000, config.n_features)))
+    lasting = config.feature_names.index('force_shift_min')
+    x[:, lasting] = rng.uniform(0, 3, size=4000)
+    y = (x[:, lasting] > 1.0).astype(int)
+    return toy_bundle(config=config, x=x, y=y, created='2026-11-28T00:00:00+00:00')
+
+
+@pytest.fixture(scope='module')
+def bundle() -> ModelBundle:
+    return _bundle(CONFIG)
+
+
+def _events(*, ramp_s: float = 1.5, knock: bool = False) -> list:
+    """Return wrench messages: 5 N held along -z, the table taking 3 N over ``ramp_s`` from 3 s."""
+    rng = np.random.default_rng(1)
+    n = int(6.0 * RATE)
+    t = T0 + np.arange(n) / RATE
+    force = rng.normal(scale=0.02, size=(n, 3))
+    torque = rng.normal(scale=0.002, size=(n, 3))
+    force[:, 2] -= 5.0
+    if knock:
+        force[(t - T0 >= START_S) & (t - T0 < START_S + 0.03), 2] -= 10.0
+    else:
+        force[:, 2] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
+    return [WrenchEvent(t=t[i:i + 1], force=force[i:i + 1], torque=torque[i:i + 1],
+                        now=float(t[i]) + 0.002) for i in range(n)]
+
+
+def _run(bundle, events, *, in_blocks=True, **load):
+    rule = replace(bundle.decision_rule, **load)
+    detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
+        audio_rate=16000.0, wrench_rate=RATE, rule=rule))
+    return run_detector(events, detector=detector, in_blocks=in_blocks)
+
+
+@pytest.mark.parametrize('in_blocks', [True, False])
+def test_the_load_path_releases_a_slow_transfer_the_forest_misses(bundle, in_blocks):
+    assert _run(bundle, _events(), in_blocks=in_blocks).releases == []
+    run = _run(bundle, _events(), in_blocks=in_blocks, **LOAD)
+    # 2 N of the 3 N are off at 1.0 s into the ramp; held for 20 frames (0.2 s) after that
+    assert run.releases == [pytest.approx(T0 + START_S + 1.0 + 0.2, abs=0.03)]
+
+
+def test_the_forest_still_reads_only_the_model_columns(bundle):
+    # the same P(contact) per frame with and without the load path's column computed
+    plain, loaded = _run(bundle, _events()), _run(bundle, _events(), **LOAD)
+    assert np.array_equal(plain.t, loaded.t) and np.array_equal(plain.p, loaded.p)
+
+
+def test_the_load_path_ignores_a_knock_and_needs_the_forest_behind_it(bundle):
+    # a 10 N knock for 30 ms is far from the carried load but not for 20 frames
+    assert _run(bundle, _events(knock=True), **LOAD).releases == []
+    # with backing asked for, the forest's 0 over the slow ramp holds the release back
+    assert _run(bundle, _events(), **{**LOAD, 'load_support': 0.5}).releases == []
+
+
+def test_a_model_without_the_carried_load_refuses_the_load_path():
+    config = replace(CONFIG, extra_features=SHIFT_FEATURES)
+    bundle = _bundle(config)
+    rule = replace(bundle.decision_rule, **LOAD)
+    with pytest.raises(ConfigError, match='carried'):
+        ContactDetector(bundle=bundle, settings=DetectorSettings(wrench_rate=RATE, rule=rule))
+    detector = ContactDetector(bundle=bundle, settings=DetectorSettings(wrench_rate=RATE))
+    with pytest.raises(ConfigError, match='release.load_threshold'):
+        detector.set_rule(rule)
+    assert detector.rule == bundle.decision_rule          # the refused rule did not apply
+    with pytest.raises(ModelError, match='load path'):
+        replace(bundle, decision_rule=rule)
