@@ -20,6 +20,13 @@ Streams a synthetic recording through StreamingFeatureExtractor the way the node
 chunks), at 16/44.1 kHz audio with 100 Hz/1 kHz F/T. Prints a markdown table of medians.
 
     python benchmarks/bench_features.py [--seconds 30] [--repeats 5]
+                                        [--configs default,shipped,shipped+load]
+
+``--configs``: ``default`` is ``FeatureConfig()`` (the paper's seven on a sliding window),
+``shipped`` the shipped multimodal model's, ``shipped+load`` that with the load path's column
+(``force_carried_shift``), which the detector computes beside the columns of every model that
+measures the carried load. With several, their runs alternate (one of each in turn) so that
+they share the machine's load, and the table has one row per configuration.
 """
 
 import argparse
@@ -27,6 +34,7 @@ import statistics
 import time
 
 from contact_detector.features import FeatureConfig, StreamingFeatureExtractor
+from contact_detector.features.config import LOAD_FEATURE
 from contact_detector.sim.synthetic import synthetic_recording
 import numpy as np
 
@@ -53,15 +61,25 @@ def run_once(*, config, recording, audio_rate, ft_rate, audio_chunk, ft_chunk):
     return time.perf_counter() - start, frames
 
 
+#: The configurations --configs names.
+CONFIGS = {'default': FeatureConfig(), 'shipped': FeatureConfig.shipped(),
+           'shipped+load': FeatureConfig.shipped().with_extra((LOAD_FEATURE,))}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument('--seconds', type=float, default=30.0)
     parser.add_argument('--repeats', type=int, default=5)
+    parser.add_argument('--configs', default='default',
+                        help=f'comma-separated, from {sorted(CONFIGS)} (default: default)')
     args = parser.parse_args()
-    config = FeatureConfig()
+    names = args.configs.split(',')
+    unknown = sorted(set(names) - set(CONFIGS))
+    if unknown:
+        parser.error(f'unknown configurations {unknown}; known: {sorted(CONFIGS)}')
     print(f'feature core, {args.seconds:.0f} s of input, median of {args.repeats} runs\n')
-    print('| audio | F/T | delivery | us / audio frame | real-time factor |')
-    print('|---|---|---|---|---|')
+    print('| configuration | audio | F/T | delivery | us / audio frame | real-time factor |')
+    print('|---|---|---|---|---|---|')
     for audio_rate in (16000, 44100):
         for ft_rate in (100.0, 1000.0):
             recording = synthetic_recording(audio_rate=audio_rate, ft_rate=ft_rate,
@@ -69,13 +87,17 @@ def main() -> None:
             for label, audio_chunk, ft_chunk in (
                     ('live: 10 ms audio, 1 wrench/msg', audio_rate // 100, 1),
                     ('offline: 1 s chunks', audio_rate, int(ft_rate))):
-                runs = [run_once(config=config, recording=recording, audio_rate=audio_rate,
-                                 ft_rate=ft_rate, audio_chunk=audio_chunk, ft_chunk=ft_chunk)
-                        for _ in range(args.repeats)]
-                seconds = statistics.median(r[0] for r in runs)
-                frames = runs[0][1]
-                print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {label} | '
-                      f'{1e6 * seconds / frames:.1f} | {args.seconds / seconds:.0f}x |')
+                runs = {name: [] for name in names}
+                for _ in range(args.repeats):
+                    for name in names:
+                        runs[name].append(run_once(
+                            config=CONFIGS[name], recording=recording, audio_rate=audio_rate,
+                            ft_rate=ft_rate, audio_chunk=audio_chunk, ft_chunk=ft_chunk))
+                for name in names:
+                    seconds = statistics.median(r[0] for r in runs[name])
+                    frames = runs[name][0][1]
+                    print(f'| {name} | {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {label} | '
+                          f'{1e6 * seconds / frames:.1f} | {args.seconds / seconds:.0f}x |')
 
 
 if __name__ == '__main__':

@@ -27,10 +27,11 @@ P(contact) and release logic as ``contact-detector sweep --model M --knocks``) a
 - the trials by the time from their newest knock to the onset (inside the shipped 0.5 s
   window of ``*_change_max`` / ``*_shift_max``, inside the 0.64 s F/T window, or older):
   caught, early, median latency, the median excess over the trial's condition set's median
-  without a knock, how many the slow path released, and the largest ``force_change_max`` in
-  the 50 ms before the onset;
+  without a knock, how many the slow path and the load path released, and the largest
+  ``force_change_max`` in the 50 ms before the onset;
 - with ``--trials``, one line per knocked trial: condition, knock-to-onset time, latency, the
-  path that released (fast: P >= threshold; slow: the mean of the last frames) and the highest
+  path that released (fast: P >= threshold; slow: the mean of the last frames; load: the load
+  path, the force held from the carried load with the forest behind it) and the highest
   P(contact) in the first 50 ms after the onset.
 
 Latency is release - onset of the caught trials (``detected``); the medians are over those.
@@ -44,6 +45,7 @@ import sys
 
 from contact_detector.detection.release import ReleaseLogic
 from contact_detector.evaluation.metrics import score_trial
+from contact_detector.features.config import LOAD_FEATURE
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
@@ -65,25 +67,44 @@ def newest_knock_before(truth) -> float:
     return min(gaps) if gaps else float('nan')
 
 
+def frames_config(bundle):
+    """Return the model's feature configuration with the load path's column."""
+    config = bundle.feature_config
+    return config.with_extra((LOAD_FEATURE,)) if config.measures_carried else config
+
+
+def release_path(*, rule, p: np.ndarray, i: int) -> str:
+    """Which path released at frame ``i``: fast (p >= threshold), slow (the mean), else load."""
+    if p[i] >= rule.threshold:
+        return 'fast'
+    k = rule.sustain_frames
+    if k and i + 1 >= k and float(np.mean(p[i + 1 - k:i + 1])) >= rule.sustain_threshold:
+        return 'slow'
+    return 'load' if rule.uses_load else 'slow'
+
+
 def trial_rows(*, bundle, frames) -> list:
     """One dict per trial: condition, knock, latency, verdict, path, features at onset."""
     forest = bundle.compile()
     rule = bundle.decision_rule
-    names = bundle.feature_config.feature_names
+    names = frames_config(bundle).feature_names
+    n_model = bundle.feature_config.n_features
     col = names.index('force_change_max') if 'force_change_max' in names else None
+    load_col = names.index(LOAD_FEATURE) if LOAD_FEATURE in names else None
     rows = []
     for name, f in sorted(frames.items()):
-        p = forest.predict_proba(f.x) if f.x.shape[0] else np.zeros(0)
+        p = forest.predict_proba(f.x[:, :n_model]) if f.x.shape[0] else np.zeros(0)
         logic = ReleaseLogic(rule=rule, armed=True)
         _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
-                                 blocked=f.t < f.t0 + WARMUP_S)
+                                 blocked=f.t < f.t0 + WARMUP_S,
+                                 load=None if load_col is None else f.x[:, load_col])
         out = score_trial(truth=f.truth, releases=releases, events=list(logic.last_events))
         onset = f.truth.onset_t
         path = '-'
         if out.release_t is not None:
             i = int(np.searchsorted(f.t, out.release_t))
             i = min(i, p.size - 1)
-            path = 'fast' if p[i] >= rule.threshold else 'slow'
+            path = release_path(rule=rule, p=p, i=i)
         after = (f.t >= onset) & (f.t < onset + 0.05)
         before = (f.t < onset) & (f.t >= onset - 0.05)
         rows.append({
@@ -116,8 +137,8 @@ def report(rows: list, *, per_trial: bool) -> str:
                    for c, rs in by_cond.items()}
     text += ['', '| newest knock on the hand before the onset [s] | trials | caught | early | '
              "median [ms] | median of latency minus its condition set's median without a "
-             'knock [ms] | released by the slow path | median force_change_max, 50 ms before '
-             'the onset [N] |', '|---|---|---|---|---|---|---|---|']
+             'knock [ms] | released by the slow path / the load path | median '
+             'force_change_max, 50 ms before the onset [N] |', '|---|---|---|---|---|---|---|---|']
     # 0.5 s: the shipped change_max_frames; 0.65 s: the 0.64 s F/T window and the 0.6 s
     # shift baseline, the longest memory of a feature
     bins = [(0.0, 0.3), (0.3, 0.5), (0.5, 0.65), (0.65, 1.0), (1.0, 2.0), (2.0, np.inf)]
@@ -139,7 +160,8 @@ def report(rows: list, *, per_trial: bool) -> str:
                     f'{sum(r["verdict"] == "premature" for r in rs)} | '
                     f'{median_ms([r["latency"] for r in caught])} | '
                     f'{excess_ms} | '
-                    f'{sum(r["path"] == "slow" for r in caught)} | '
+                    f'{sum(r["path"] == "slow" for r in caught)} / '
+                    f'{sum(r["path"] == "load" for r in caught)} | '
                     f'{(float(np.median(cm)) if cm else float("nan")):.2f} |')
     if per_trial:
         text += ['', '| trial | condition | knock before onset [s] | verdict | latency [ms] | '
@@ -165,7 +187,7 @@ def main() -> int:
     parser.add_argument('--jobs', type=int, default=2)
     args = parser.parse_args()
     bundle = load_bundle(path=args.model)
-    config = bundle.feature_config
+    config = frames_config(bundle)
     rows = {}
     for i, folder in enumerate(args.folders):
         trials = decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=str(i))

@@ -28,6 +28,9 @@ careful engineer would set them by hand; the fixed torque threshold is the recor
   rest level by ``k`` rest deviations, unless a band-pass (5-20 Hz) observer says the change
   is a collision (after Li et al. 2019).
 * ``audio-onset``: audio power (eq. 1) ``db`` dB above the tracked noise floor.
+* ``guard``: ``|F - F_rest| >= 2 N``, the distance of the force vector from its per-axis rest
+  median, the plain guard the issues compare the forests with (the statistic of the load path,
+  ``force_carried_shift``, without the forest behind it).
 """
 
 import math
@@ -38,11 +41,12 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.features.config import FeatureConfig
+from contact_detector.features.deltas import vector_shift
 from contact_detector.model.rule import DecisionRule
 import numpy as np
 from scipy import signal
 
-BASELINES = ('threshold', 'highpass', 'lowpass-bandpass', 'audio-onset')
+BASELINES = ('threshold', 'highpass', 'lowpass-bandpass', 'audio-onset', 'guard')
 
 
 class _Baseline:
@@ -256,6 +260,43 @@ class AudioOnsetBaseline(_Baseline):
         return self._decide(t, (ratio_db >= self.db) & ~calibrating, calibrating)
 
 
+class GuardBaseline(_Baseline):
+    """
+    The plain guard: contact when ``|F - F_rest| >= threshold_n``.
+
+    ``F_rest`` is the per-axis median of the force over the calibration period (the hand at
+    rest with its load); the distance is the length of the vector change
+    (:func:`~contact_detector.features.deltas.vector_shift`), so neither the sensor's mounting
+    nor a constant bias matters. A knock or a push over the threshold fires it as surely as the
+    table does: the point of the comparison.
+    """
+
+    def __init__(self, *, threshold_n: float = 2.0, **kw) -> None:
+        self.threshold_n = threshold_n
+        super().__init__(**kw)
+
+    def reset(self) -> None:
+        super().reset()
+        self._rest_rows: list = []
+        self._rest: Optional[np.ndarray] = None
+
+    def on_wrench(self, *, t, force, torque, now: Optional[float] = None) -> Decisions:
+        try:
+            t, force, torque = self._wrench_arrays(t, force, torque)
+        except InputError as err:
+            return self.drop(kind='wrench', reason=str(err))
+        calibrating = t < self._t0 + self.calibration_s
+        if self._rest is None:
+            self._rest_rows.extend(force[calibrating].tolist())
+            if not calibrating.all():
+                self._rest = np.median(np.asarray(self._rest_rows).reshape(-1, 3), axis=0)
+        if self._rest is None:
+            return self._decide(t, np.zeros(t.size, bool), calibrating)
+        change = np.concatenate([force - self._rest, np.zeros_like(force)], axis=1)
+        flag = vector_shift(change=change)[:, 0] >= self.threshold_n
+        return self._decide(t, flag & ~calibrating, calibrating)
+
+
 def make_baseline(name: str, *, wrench_rate: float, audio_rate: float) -> _Baseline:
     """
     Build a baseline detector by name.
@@ -267,7 +308,8 @@ def make_baseline(name: str, *, wrench_rate: float, audio_rate: float) -> _Basel
 
     """
     classes = {'threshold': ThresholdBaseline, 'highpass': HighPassBaseline,
-               'lowpass-bandpass': LowPassBandPassBaseline, 'audio-onset': AudioOnsetBaseline}
+               'lowpass-bandpass': LowPassBandPassBaseline, 'audio-onset': AudioOnsetBaseline,
+               'guard': GuardBaseline}
     if name not in classes:
         raise ConfigError(f'unknown detector {name!r}; choose forest or one of {BASELINES}')
     if not (math.isfinite(wrench_rate) and wrench_rate > 0):

@@ -509,6 +509,25 @@ def test_lowpass_bandpass_baseline():
     assert all(e > 2.1 for e in _run_wrench('lowpass-bandpass', t, force, torque))
 
 
+def test_guard_baseline():
+    # |F - F_rest| >= 2 N, whatever the rest load: a 3 N step fires at once, 1.5 N never; a
+    # 4 N ramp over 1 s crosses 2 N half way; any direction counts (a vector distance)
+    assert _run_wrench('guard', *_wrench()) == []
+    assert _run_wrench('guard', *_wrench(force_x=[(2.0, 3.0, 0)])) == [pytest.approx(2.0)]
+    assert _run_wrench('guard', *_wrench(force_x=[(2.0, -3.0, 0)])) == [pytest.approx(2.0)]
+    assert _run_wrench('guard', *_wrench(force_x=[(2.0, 1.5, 0)])) == []
+    assert _run_wrench('guard', *_wrench(force_x=[(2.0, 4.0, 1.0)])) == [
+        pytest.approx(2.5, abs=0.02)]
+    t, force, torque = _wrench()
+    force[:, 1] += np.where(t - 100.0 >= 2.0, 2.5, 0.0)             # sideways
+    assert _run_wrench('guard', t, force + 30.0, torque) == [pytest.approx(2.0)]
+    # a knock of 10 N for 20 ms fires it too: the guard cannot tell, the forests are there for it
+    t, force, torque = _wrench()
+    force[200:202, 2] -= 10.0
+    assert _run_wrench('guard', t, force, torque) == [pytest.approx(2.0)]
+    assert _run_wrench('guard', *_wrench(torque_y=[(2.0, -4.0, 0)])) == []     # F only
+
+
 def test_audio_onset_baseline():
     rate = 16000
 
