@@ -139,6 +139,19 @@ def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path
     assert bundle.training['augmentation']['torque_scale'] == [0.333, 3.0]
 
 
+def test_train_no_audio_without_carried_features_needs_the_load_path_off(no_audio, tmp_path,
+                                                                         capsys):
+    # --no-audio's rule has the load path, which needs the carried load: features without it
+    # are refused before any work, with the way out; with --load-threshold 0 they train
+    args = ['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1', '--trees', '1',
+            '--extra-features', 'force_shift,torque_shift', '--out', str(tmp_path / 'x.npz')]
+    assert cli_main.main(args) == 1
+    err = capsys.readouterr().err
+    assert '--load-threshold needs the carried load' in err and '--load-threshold 0' in err
+    assert cli_main.main(args + ['--load-threshold', '0']) == 0
+    assert not load_bundle(path=tmp_path / 'x.npz').decision_rule.uses_load
+
+
 def test_train_no_audio_refuses_audio_features(no_audio, tmp_path, capsys):
     assert cli_main.main(['train', str(no_audio), '--no-audio', '--extra-features',
                           'audio_peak_rel_db,force_shift', '--out',
