@@ -19,7 +19,7 @@ Pure state machine, no ROS, no clock: frame times are passed in.
 """
 
 from collections import deque
-from itertools import islice
+from itertools import islice, repeat
 import math
 from typing import Any, Dict, Mapping, Optional
 
@@ -200,8 +200,8 @@ class ReleaseLogic:
         contact = np.zeros(ok.shape[0], dtype=bool)
         releases = []
         self.last_events = []
-        loads = (np.zeros(ok.shape[0]) if load is None
-                 else np.asarray(load, dtype=np.float64)).tolist()
+        loads = (repeat(0.0) if load is None
+                 else np.asarray(load, dtype=np.float64).tolist())
         for i, (ti, pi, oki, li) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
                                                   np.asarray(p, dtype=np.float64).tolist(),
                                                   ok.tolist(), loads)):

@@ -41,7 +41,6 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import AudioFramer, NoiseFloor, to_unit_audio
 from contact_detector.features.config import FeatureConfig
-from contact_detector.features.deltas import vector_shift
 from contact_detector.model.rule import DecisionRule
 import numpy as np
 from scipy import signal
@@ -265,9 +264,8 @@ class GuardBaseline(_Baseline):
     The plain guard: contact when ``|F - F_rest| >= threshold_n``.
 
     ``F_rest`` is the per-axis median of the force over the calibration period (the hand at
-    rest with its load); the distance is the length of the vector change
-    (:func:`~contact_detector.features.deltas.vector_shift`), so neither the sensor's mounting
-    nor a constant bias matters. A knock or a push over the threshold fires it as surely as the
+    rest with its load); the distance is the length of the vector change, so neither the
+    sensor's mounting nor a constant bias matters. A knock or a push over the threshold fires it as surely as the
     table does: the point of the comparison.
     """
 
@@ -292,8 +290,7 @@ class GuardBaseline(_Baseline):
                 self._rest = np.median(np.asarray(self._rest_rows).reshape(-1, 3), axis=0)
         if self._rest is None:
             return self._decide(t, np.zeros(t.size, bool), calibrating)
-        change = np.concatenate([force - self._rest, np.zeros_like(force)], axis=1)
-        flag = vector_shift(change=change)[:, 0] >= self.threshold_n
+        flag = np.linalg.norm(force - self._rest, axis=1) >= self.threshold_n
         return self._decide(t, flag & ~calibrating, calibrating)
 
 
