@@ -265,8 +265,8 @@ class GuardBaseline(_Baseline):
 
     ``F_rest`` is the per-axis median of the force over the calibration period (the hand at
     rest with its load); the distance is the length of the vector change, so neither the
-    sensor's mounting nor a constant bias matters. A knock or a push over the threshold fires it as surely as the
-    table does: the point of the comparison.
+    sensor's mounting nor a constant bias matters. A knock or a push over the threshold fires
+    it as surely as the table does: the point of the comparison.
     """
 
     def __init__(self, *, threshold_n: float = 2.0, **kw) -> None:
