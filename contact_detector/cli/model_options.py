@@ -22,7 +22,7 @@ import argparse
 from typing import Callable, Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
-from contact_detector.model.rule import DecisionRule, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD_FAST_FIELDS, LOAD_FIELDS
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_RULE,
@@ -123,6 +123,17 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f'default {DEFAULT_FT_ONLY_RULE.load_support:g}')
     parser.add_argument('--load-support-frames', type=int, default=None,
                         help=f'default {DEFAULT_FT_ONLY_RULE.load_support_frames}')
+    parser.add_argument('--load-fast-threshold', type=float, default=None, metavar='N',
+                        help='fast load path: the load path again with its own --load-fast-* '
+                             'distance, frames and backing (0 = off; default '
+                             f'{DEFAULT_RULE.load_fast_threshold:g}; with --no-audio '
+                             f'{DEFAULT_FT_ONLY_RULE.load_fast_threshold:g})')
+    parser.add_argument('--load-fast-frames', type=int, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_frames}')
+    parser.add_argument('--load-fast-support', type=float, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_support:g}')
+    parser.add_argument('--load-fast-support-frames', type=int, default=None,
+                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_support_frames}')
 
 
 def tree_counts(text: str) -> list:
@@ -143,12 +154,12 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
     """
     Build the DecisionRule from parsed options.
 
-    The load path's options not given take the defaults of the model kind: the F/T-only
+    The load paths' options not given take the defaults of the model kind: the F/T-only
     recipe's with ``--no-audio``, else the multimodal one's.
     """
     kind = DEFAULT_FT_ONLY_RULE if getattr(args, 'no_audio', False) else DEFAULT_RULE
     load = {name: (getattr(kind, name) if getattr(args, name, None) is None
-                   else getattr(args, name)) for name in LOAD_FIELDS}
+                   else getattr(args, name)) for name in LOAD_FIELDS + LOAD_FAST_FIELDS}
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,

@@ -54,12 +54,12 @@ from typing import List, Optional, Sequence
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.cli.model_options import (add_augmentation_arguments,
                                                 augmentation_from_args)
-from contact_detector.errors import ContactDetectorError
+from contact_detector.errors import ConfigError, ContactDetectorError
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.rule import DecisionRule, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD_FAST_FIELDS, LOAD_FIELDS
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
@@ -189,6 +189,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--load-support', type=float, default=DecisionRule.load_support)
     parser.add_argument('--load-support-frames', type=int,
                         default=DecisionRule.load_support_frames)
+    parser.add_argument('--load-fast-threshold', type=float, default=0.0, metavar='N',
+                        help='with --load-threshold: the scored rule also has the fast load '
+                             'path, the same test with its own --load-fast-* distance, frames '
+                             'and backing (default 0: off)')
+    parser.add_argument('--load-fast-frames', type=int, default=DecisionRule.load_fast_frames)
+    parser.add_argument('--load-fast-support', type=float,
+                        default=DecisionRule.load_fast_support)
+    parser.add_argument('--load-fast-support-frames', type=int,
+                        default=DecisionRule.load_fast_support_frames)
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
@@ -305,10 +314,13 @@ def with_model(args) -> str:
 
 
 def load_fields(args: argparse.Namespace) -> Optional[dict]:
-    """Return the load path's DecisionRule fields from the options (validated), or None."""
+    """Return the load paths' DecisionRule fields from the options (validated), or None."""
     if args.load_threshold <= 0:
+        if args.load_fast_threshold > 0:
+            raise ConfigError('--load-fast-threshold needs --load-threshold: the scored rule '
+                              'adds both load paths')
         return None
-    fields = {name: getattr(args, name) for name in LOAD_FIELDS}
+    fields = {name: getattr(args, name) for name in LOAD_FIELDS + LOAD_FAST_FIELDS}
     DecisionRule(**fields)          # ConfigError naming a bad value
     return fields
 

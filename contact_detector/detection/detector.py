@@ -327,9 +327,10 @@ class ContactDetector:
         """Return ``rule``; raise ConfigError if it needs a load the model cannot give."""
         if rule.uses_load and self._load_col is None:
             raise ConfigError(
-                f'the load path (load_threshold {rule.load_threshold:g} N) needs the carried '
-                f'load, which model {self.bundle.model_id} does not measure (it has no '
-                'carried-load feature); set release.load_threshold to 0')
+                f'the load paths (load_threshold {rule.load_threshold:g} N, '
+                f'load_fast_threshold {rule.load_fast_threshold:g} N) need the carried load, '
+                f'which model {self.bundle.model_id} does not measure (it has no carried-load '
+                'feature); set release.load_threshold and release.load_fast_threshold to 0')
         return rule
 
     # --- input -----------------------------------------------------------------------------

@@ -42,6 +42,10 @@ RULE_PARAMETERS = {
     'release.load_frames': ('load_frames', 1),
     'release.load_support': ('load_support', 0.0),
     'release.load_support_frames': ('load_support_frames', 1),
+    'release.load_fast_threshold': ('load_fast_threshold', 0.0),
+    'release.load_fast_frames': ('load_fast_frames', 1),
+    'release.load_fast_support': ('load_fast_support', 0.0),
+    'release.load_fast_support_frames': ('load_fast_support_frames', 1),
 }
 
 
@@ -95,10 +99,13 @@ class ReleaseLogic:
       the force from the carried load, ``force_carried_shift``, N) has been
       ``>= rule.load_threshold`` in the newest ``rule.load_frames`` consecutive frames, and
       the mean P(contact) of the newest ``rule.load_support_frames`` frames is
-      ``>= rule.load_support``.
+      ``>= rule.load_support``, or
+    - ``rule.load_fast_threshold > 0`` (the fast load path) and the same holds with
+      ``rule.load_fast_threshold``, ``rule.load_fast_frames``, ``rule.load_fast_support`` and
+      ``rule.load_fast_support_frames``.
 
-    The means, the evidence and the load run need consecutive valid, unblocked frames: an
-    invalid or blocked frame empties the history, the evidence and the run. A contact *event*
+    The means, the evidence and the load runs need consecutive valid, unblocked frames: an
+    invalid or blocked frame empties the history, the evidence and the runs. A contact *event*
     starts when ``rule.confirm_frames`` consecutive frames are contact and at least
     ``rule.refractory_s`` have passed since the previous event.
     An event releases only while armed, and a release disarms: at most one release per arming.
@@ -128,6 +135,7 @@ class ReleaseLogic:
         self._recent.clear()
         self._evidence = 0.0
         self._load_run = 0
+        self._load_fast_run = 0
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
@@ -138,19 +146,22 @@ class ReleaseLogic:
         rule = self.rule
         recent = self._recent
         recent.append(p)
-        while len(recent) > max(rule.average_frames, rule.sustain_frames,
-                                rule.load_support_frames if rule.uses_load else 0):
+        while len(recent) > max(rule.average_frames, rule.sustain_frames, rule.load_history):
             recent.popleft()
         evidence = self._evidence + p - rule.evidence_drift
         self._evidence = evidence if evidence > 0.0 else 0.0
         # not >= on the negation: a NaN load never counts
         self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
+        self._load_fast_run = self._load_fast_run + 1 if load >= rule.load_fast_threshold else 0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
             return True
         if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
             return True
-        if rule.uses_load and self._load_run >= rule.load_frames \
+        if rule.load_threshold > 0 and self._load_run >= rule.load_frames \
                 and self._mean_of_last(rule.load_support_frames) >= rule.load_support:
+            return True
+        if rule.load_fast_threshold > 0 and self._load_fast_run >= rule.load_fast_frames \
+                and self._mean_of_last(rule.load_fast_support_frames) >= rule.load_fast_support:
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
@@ -242,6 +253,7 @@ class ReleaseLogic:
             self._evidence = 0.0
             self._run = 0
             self._load_run = 0
+            self._load_fast_run = 0
             return False
         if not self._is_contact(p, load):
             self._run = 0

@@ -31,6 +31,9 @@ import numpy as np
 
 #: The load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
 LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_frames')
+#: The fast load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
+LOAD_FAST_FIELDS = ('load_fast_threshold', 'load_fast_frames', 'load_fast_support',
+                    'load_fast_support_frames')
 
 
 @dataclass(frozen=True)
@@ -67,6 +70,13 @@ class DecisionRule:
         The backing the load path needs: the mean P(contact) of the newest
         ``load_support_frames`` frames ``>= load_support``. A knock on the hand does not hold
         the load away for ``load_frames``; a push that does, the forest calls no contact.
+    load_fast_threshold, load_fast_frames, load_fast_support, load_fast_support_frames
+        Fast load path (0 N = off): the load path again, for a load change well beyond a brush
+        or a touch: the force ``>= load_fast_threshold`` N from the carried load for the
+        newest ``load_fast_frames`` frames (float, int), and the mean P(contact) of the newest
+        ``load_fast_support_frames`` frames ``>= load_fast_support`` (float, int). A large,
+        held change needs fewer frames to tell from a knock's push and rebound than a small
+        one, if the forest backs it more strongly.
 
     """
 
@@ -82,6 +92,10 @@ class DecisionRule:
     load_frames: int = 20
     load_support: float = 0.15
     load_support_frames: int = 25
+    load_fast_threshold: float = 0.0
+    load_fast_frames: int = 3
+    load_fast_support: float = 0.3
+    load_fast_support_frames: int = 5
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
@@ -89,7 +103,9 @@ class DecisionRule:
                                 ('sustain_threshold', 0.0, 1.0),
                                 ('evidence_threshold', 0.0, 1000.0),
                                 ('evidence_drift', 0.0, 1.0),
-                                ('load_threshold', 0.0, 1000.0), ('load_support', 0.0, 1.0)):
+                                ('load_threshold', 0.0, 1000.0), ('load_support', 0.0, 1.0),
+                                ('load_fast_threshold', 0.0, 1000.0),
+                                ('load_fast_support', 0.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
@@ -97,7 +113,8 @@ class DecisionRule:
                                   f'[{low}, {high}], got {value!r}')
             object.__setattr__(self, name, float(value))
         for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0),
-                          ('load_frames', 1), ('load_support_frames', 1)):
+                          ('load_frames', 1), ('load_support_frames', 1),
+                          ('load_fast_frames', 1), ('load_fast_support_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
                     or value < low:
@@ -120,6 +137,11 @@ class DecisionRule:
             text += (f' load_threshold={self.load_threshold:.3f} load_frames={self.load_frames}'
                      f' load_support={self.load_support:.3f}'
                      f' load_support_frames={self.load_support_frames}')
+        if self.load_fast_threshold > 0:
+            text += (f' load_fast_threshold={self.load_fast_threshold:.3f}'
+                     f' load_fast_frames={self.load_fast_frames}'
+                     f' load_fast_support={self.load_fast_support:.3f}'
+                     f' load_fast_support_frames={self.load_fast_support_frames}')
         return text
 
     def short(self) -> str:
@@ -134,24 +156,35 @@ class DecisionRule:
         if self.load_threshold > 0:
             text += (f' or load>={self.load_threshold:g}N x{self.load_frames}'
                      f' & mean{self.load_support_frames}>={self.load_support:g}')
+        if self.load_fast_threshold > 0:
+            text += (f' or load>={self.load_fast_threshold:g}N x{self.load_fast_frames}'
+                     f' & mean{self.load_fast_support_frames}>={self.load_fast_support:g}')
         return text
 
     @property
     def uses_load(self) -> bool:
-        """Return True when the load path is on (it needs ``force_carried_shift`` per frame)."""
-        return self.load_threshold > 0
+        """Return True when a load path is on (it needs ``force_carried_shift`` per frame)."""
+        return self.load_threshold > 0 or self.load_fast_threshold > 0
+
+    @property
+    def load_history(self) -> int:
+        """Return the most P(contact) frames the load paths average (0 when both are off)."""
+        return max(self.load_support_frames if self.load_threshold > 0 else 0,
+                   self.load_fast_support_frames if self.load_fast_threshold > 0 else 0)
 
     def to_dict(self) -> dict:
         """
         Plain-JSON form, stored in bundles and cards.
 
-        The load path's fields are written only when it is on, so the rules of models written
+        Each load path's fields are written only when it is on, so the rules of models written
         before it existed are stored as they were.
         """
         data = dataclasses.asdict(self)
-        if not self.uses_load:
-            for name in LOAD_FIELDS:
-                del data[name]
+        for names, threshold in ((LOAD_FIELDS, self.load_threshold),
+                                 (LOAD_FAST_FIELDS, self.load_fast_threshold)):
+            if threshold <= 0:
+                for name in names:
+                    del data[name]
         return data
 
     @classmethod

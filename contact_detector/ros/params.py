@@ -180,6 +180,17 @@ PARAMS: Sequence[ParamSpec] = (
               'the decision rule of the model.', -1.0, 1.0, read_only=False),
     ParamSpec('release.load_support_frames', 0, 'Frames of that mean; 0 = the decision rule '
               'of the model.', 0, 1000, read_only=False),
+    ParamSpec('release.load_fast_threshold', -1.0, 'Fast load path: the load path again with '
+              'its own distance, frames and backing, for large load changes, N (0 = off; needs '
+              'a model with carried-load features); negative = the decision rule of the model.',
+              -1.0, 1000.0, read_only=False),
+    ParamSpec('release.load_fast_frames', 0, 'Frames the fast load path needs the force away '
+              'from the carried load; 0 = the decision rule of the model.', 0, 1000,
+              read_only=False),
+    ParamSpec('release.load_fast_support', -1.0, 'Mean P(contact) the fast load path needs; '
+              'negative = the decision rule of the model.', -1.0, 1.0, read_only=False),
+    ParamSpec('release.load_fast_support_frames', 0, 'Frames of that mean; 0 = the decision '
+              'rule of the model.', 0, 1000, read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',

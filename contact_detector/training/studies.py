@@ -294,8 +294,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     event (:class:`~.protocol.LabelWindow`).
     ``families`` leaves only those families out in turn (every forest still trains on all the
     others; default: every family, the figure to choose by); a name no trial has raises
-    ConfigError. ``load`` (the load path's :class:`DecisionRule` fields) adds the shipped rule
-    with that load path, second after the shipped rule. Returns markdown.
+    ConfigError. ``load`` (the load paths' :class:`DecisionRule` fields) adds the shipped rule
+    with those load paths, second after the shipped rule (see :func:`load_rules`). Returns
+    markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
     present = {events_truth[1].condition for events_truth in trials.values()}
@@ -314,8 +315,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
         return cache[config, augmented]
 
     rules = lofo_rules()
-    if load:
-        rules[1:1] = [replace(DEFAULT_RULE, **load)]
+    rules[1:1] = load_rules(base=DEFAULT_RULE, load=load)
     worst_lines = ['| setting | rule | worst family | detected | premature (after) | '
                    'median [ms] | p95 [ms] | all families: detected / premature | '
                    'knocked on the hand, all families: detected / premature / median [ms] |',
@@ -427,6 +427,22 @@ def ablation_study(*, trials: Dict[str, tuple], sustain: Sequence[float], seeds:
     return '\n'.join(lines)
 
 
+def load_rules(*, base: DecisionRule, load: Optional[Dict[str, Any]]) -> List[DecisionRule]:
+    """
+    Return the rules a study adds for the load paths' fields ``load`` (None: none).
+
+    ``base`` with the load path; when ``load`` turns the fast load path on as well, first
+    ``base`` with the load path alone and then with both, so that one run scores what the
+    fast path adds on the same forests.
+    """
+    if not load:
+        return []
+    rules = [replace(base, **load)]
+    if load.get('load_fast_threshold', 0.0) > 0:
+        rules.insert(0, replace(rules[0], load_fast_threshold=0.0))
+    return rules
+
+
 def model_study(*, bundle: ModelBundle, groups: Sequence[tuple], title: str,
                 audio_rate: float, wrench_rate: float, jobs: int,
                 load: Optional[Dict[str, Any]] = None) -> str:
@@ -434,12 +450,12 @@ def model_study(*, bundle: ModelBundle, groups: Sequence[tuple], title: str,
     Score :func:`model_rules` with a trained model on groups of trials; return markdown.
 
     ``groups``: ``(name, trials)`` pairs, ``trials`` from :func:`decode_bags`. ``load`` (the
-    load path's :class:`DecisionRule` fields) adds the model's rule with that load path, second.
+    load paths' :class:`DecisionRule` fields) adds the model's rule with those load paths,
+    second (see :func:`load_rules`).
     """
     rules = model_rules(bundle.decision_rule)
-    if load:
-        rules.insert(1, replace(bundle.decision_rule, **load))
-        rules = list(dict.fromkeys(rules))
+    rules[1:1] = load_rules(base=bundle.decision_rule, load=load)
+    rules = list(dict.fromkeys(rules))
     text = [title, '']
     for name, trials in groups:
         if trials:

@@ -152,6 +152,27 @@ def test_the_load_path_is_scored_beside_the_model_rule(data, tmp_path, capsys):
     assert 'load_support' in capsys.readouterr().err
 
 
+def test_the_fast_load_path_is_scored_after_the_load_path_alone(data, tmp_path, capsys):
+    # one run scores the load path alone and with the fast path on the same probabilities:
+    # the fast path only adds ways to fire
+    out = tmp_path / 'fast.md'
+    assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--jobs', '1',
+                           '--load-threshold', '3', '--load-frames', '20', '--load-support', '0',
+                           '--load-fast-threshold', '0.5', '--load-fast-frames', '2',
+                           '--load-fast-support', '0', '--out', str(out)]) == 0
+    table = _table(out.read_text())
+    alone = load_bundle(path=data['model']).decision_rule.short() + ' or load>=3N x20 & mean25>=0'
+    assert [table[1][1], table[2][1]] == [alone, alone + ' or load>=0.5N x2 & mean5>=0']
+
+    def fired(row):
+        return int(row[2].split('/')[0]) + int(row[4])
+    assert fired(table[2]) >= fired(table[1])
+    with pytest.raises(SystemExit):
+        sweep_cli.main([str(data['bags']), '--model', str(data['model']),
+                        '--load-fast-threshold', '5'])
+    assert '--load-fast-threshold needs --load-threshold' in capsys.readouterr().err
+
+
 def test_own_test_needs_a_model(data, capsys):
     with pytest.raises(SystemExit):
         sweep_cli.main([str(data['bags']), '--own-test', str(data['bags'])])

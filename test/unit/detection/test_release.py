@@ -199,3 +199,56 @@ def test_load_path_rule_fields():
                 {'load_support_frames': 0}, {'load_threshold': float('nan')}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)
+
+
+FAST_RULE = replace_rule(LOAD_RULE, load_frames=20, load_fast_threshold=5.0, load_fast_frames=3,
+                         load_fast_support=0.3, load_fast_support_frames=5)
+
+
+def test_fast_load_path_releases_a_large_held_change_sooner():
+    # 6 N from the carried load from frame 10 on, a forest 0.35-sure: the slow path needs 20
+    # frames held, the fast one 3 (frame 12), once its 5-frame mean is there
+    p = [0.35] * 40
+    load = [0.0] * 10 + [6.0] * 30
+    assert _run(replace_rule(FAST_RULE, load_fast_threshold=0.0), p, load=load)[1] == [
+        pytest.approx(29 * HOP)]
+    contact, releases, _ = _run(FAST_RULE, p, load=load)
+    assert releases == [pytest.approx(12 * HOP)]
+    assert contact[:12].tolist() == [False] * 12
+    assert _run(FAST_RULE, p, load=load, pieces=list(range(1, 40)))[1] == releases
+
+
+def test_fast_load_path_needs_the_size_the_hold_and_stronger_backing():
+    p = [0.35] * 40
+    # 4.9 N is the slow path's business only (20 frames)
+    assert _run(FAST_RULE, p, load=[0.0] * 10 + [4.9] * 30)[1] == [pytest.approx(29 * HOP)]
+    # a knock: two frames at 20 N, then back
+    knock = [0.0] * 10 + [20.0] * 2 + [0.0] * 28
+    assert _run(FAST_RULE, p, load=knock)[1] == []
+    # the slow path's backing (0.2 >= 0.15) is not the fast path's (0.2 < 0.3)
+    assert _run(FAST_RULE, [0.2] * 40, load=[0.0] * 10 + [6.0] * 30)[1] == [
+        pytest.approx(29 * HOP)]
+    # an invalid frame restarts the fast run too
+    valid = [True] * 11 + [False] + [True] * 28
+    assert _run(FAST_RULE, p, load=[0.0] * 10 + [6.0] * 30, valid=valid)[1] == [
+        pytest.approx(16 * HOP)]
+
+
+def test_fast_load_path_rule_fields():
+    assert FAST_RULE.short() == ('p>=0.95 x1 or mean15>=0.4 or load>=2N x20 & mean8>=0.15'
+                                 ' or load>=5N x3 & mean5>=0.3')
+    assert FAST_RULE.uses_load and FAST_RULE.load_history == 8
+    alone = DecisionRule(threshold=0.95, load_fast_threshold=5.0, load_fast_frames=3,
+                         load_fast_support=0.3, load_fast_support_frames=5)
+    assert alone.uses_load and alone.load_history == 5
+    # each path's fields are written only when it is on: the load path's rules stay as stored
+    assert 'load_fast_threshold' not in LOAD_RULE.to_dict()
+    assert 'load_threshold' not in alone.to_dict() and 'load_fast_frames' in alone.to_dict()
+    for rule in (FAST_RULE, alone):
+        assert DecisionRule.from_dict(rule.to_dict()) == rule
+    assert rule_overrides({'release.load_fast_threshold': 5.0, 'release.load_fast_frames': 0,
+                           'release.load_fast_support': -1.0}) == {'load_fast_threshold': 5.0}
+    for bad in ({'load_fast_threshold': -1.0}, {'load_fast_frames': 0},
+                {'load_fast_support': 1.5}, {'load_fast_support_frames': 0}):
+        with pytest.raises(ConfigError, match=next(iter(bad))):
+            DecisionRule(**bad)
