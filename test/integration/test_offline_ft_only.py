@@ -90,6 +90,24 @@ def test_audio_disabled_in_params_picks_the_ft_model_for_audio_bags(tmp_path, ca
     assert len([r for r in _rows(out) if 'p' in r]) > 300
 
 
+def test_the_fast_load_path_from_params_releases_sooner_on_the_same_frames(no_audio, tmp_path):
+    # release.load_fast_* in --params turn the fast load path on for the shipped F/T-only
+    # model: the same P(contact) per frame, and the release sooner at 0.5 N held 1
+    # frame with no backing (the force leaves the carried load as the table takes it)
+    bag = no_audio / 'trial_0002'
+    params = tmp_path / 'fast.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    release:\n      load_fast_threshold: 0.5\n'
+                      '      load_fast_frames: 1\n      load_fast_support: 0.0\n')
+    shipped, fast = tmp_path / 's.jsonl', tmp_path / 'f.jsonl'
+    assert cli_main.main(['detect', str(bag), '--out', str(shipped)]) == 0
+    assert cli_main.main(['detect', str(bag), '--params', str(params), '--out', str(fast)]) == 0
+    rows_s, rows_f = _rows(shipped), _rows(fast)
+    assert [r['p'] for r in rows_s if 'p' in r] == [r['p'] for r in rows_f if 'p' in r]
+    rel_s = [r['t'] for r in rows_s if r.get('event') == 'release']
+    rel_f = [r['t'] for r in rows_f if r.get('event') == 'release']
+    assert len(rel_f) == len(rel_s) == 1 and rel_f[0] < rel_s[0]
+
+
 def test_evaluate_shows_the_ft_model_beside_the_others(no_audio, tmp_path, capsys):
     report = tmp_path / 'report'
     assert cli_main.main(['evaluate', str(no_audio), '--detector', 'all',
