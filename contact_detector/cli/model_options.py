@@ -110,30 +110,39 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help='evidence path: also contact when the sum of P(contact) - '
                              '--evidence-drift over consecutive frames reaches this (0 = off)')
     parser.add_argument('--evidence-drift', type=float, default=DEFAULT_RULE.evidence_drift)
-    parser.add_argument('--load-threshold', type=float, default=None, metavar='N',
-                        help='load path: also contact when the force has stayed this many N '
-                             'from the load carried at the start or arming for --load-frames '
-                             'frames and the mean P(contact) of --load-support-frames frames '
-                             '>= --load-support (0 = off; default '
-                             f'{DEFAULT_RULE.load_threshold:g}; with --no-audio '
-                             f'{DEFAULT_FT_ONLY_RULE.load_threshold:g})')
-    parser.add_argument('--load-frames', type=int, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_frames}')
-    parser.add_argument('--load-support', type=float, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_support:g}')
-    parser.add_argument('--load-support-frames', type=int, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_support_frames}')
-    parser.add_argument('--load-fast-threshold', type=float, default=None, metavar='N',
-                        help='fast load path: the load path again with its own --load-fast-* '
-                             'distance, frames and backing (0 = off; default '
-                             f'{DEFAULT_RULE.load_fast_threshold:g}; with --no-audio '
-                             f'{DEFAULT_FT_ONLY_RULE.load_fast_threshold:g})')
-    parser.add_argument('--load-fast-frames', type=int, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_frames}')
-    parser.add_argument('--load-fast-support', type=float, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_support:g}')
-    parser.add_argument('--load-fast-support-frames', type=int, default=None,
-                        help=f'default {DEFAULT_FT_ONLY_RULE.load_fast_support_frames}')
+    _add_load_path_arguments(
+        parser, field='load',
+        help_text='load path: also contact when the force has stayed this many N from the load '
+                  'carried at the start or arming for --load-frames frames and the mean '
+                  'P(contact) of --load-support-frames frames >= --load-support')
+    _add_load_path_arguments(
+        parser, field='load_fast',
+        help_text='fast load path: the load path again with its own --load-fast-* distance, '
+                  'frames and backing')
+
+
+def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
+                             help_text: str) -> None:
+    """
+    Add one load path's four options, ``--{field}-threshold`` and the rest.
+
+    Their defaults are None: :func:`rule_from_args` fills in the model kind's.
+    """
+    option = '--' + field.replace('_', '-')
+
+    def default(name: str) -> object:
+        return getattr(DEFAULT_FT_ONLY_RULE, f'{field}_{name}')
+
+    parser.add_argument(f'{option}-threshold', type=float, default=None, metavar='N',
+                        help=f'{help_text} (0 = off; default '
+                             f'{getattr(DEFAULT_RULE, field + "_threshold"):g}; with '
+                             f'--no-audio {default("threshold"):g})')
+    parser.add_argument(f'{option}-frames', type=int, default=None,
+                        help=f'default {default("frames")}')
+    parser.add_argument(f'{option}-support', type=float, default=None,
+                        help=f'default {default("support"):g}')
+    parser.add_argument(f'{option}-support-frames', type=int, default=None,
+                        help=f'default {default("support_frames")}')
 
 
 def tree_counts(text: str) -> list:
