@@ -36,3 +36,18 @@ def toy_bundle(*, config: FeatureConfig, x: np.ndarray, y: np.ndarray,
                        decision_rule=DecisionRule(threshold=0.6, confirm_frames=2,
                                                   refractory_s=0.5),
                        versions=runtime_versions(), training={}, metrics={}, created=created)
+
+
+def lasting_change_bundle(*, config: FeatureConfig, n: int, created: str) -> ModelBundle:
+    """
+    Return a :func:`toy_bundle` that says contact when ``force_shift_min > 1`` N.
+
+    ``n`` random frames, every feature ``|N(0, 1)|`` but ``force_shift_min`` uniform in [0, 3]
+    N: the forest encodes "a lasting change of the load", whatever the other columns say.
+    """
+    rng = np.random.default_rng(0)
+    x = np.abs(rng.normal(size=(n, config.n_features)))
+    lasting = config.feature_names.index('force_shift_min')
+    x[:, lasting] = rng.uniform(0, 3, size=n)
+    y = (x[:, lasting] > 1.0).astype(int)
+    return toy_bundle(config=config, x=x, y=y, created=created)

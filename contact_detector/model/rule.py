@@ -133,15 +133,9 @@ class DecisionRule:
         if self.evidence_threshold > 0:
             text += (f' evidence_threshold={self.evidence_threshold:.3f} '
                      f'evidence_drift={self.evidence_drift:.3f}')
-        if self.load_threshold > 0:
-            text += (f' load_threshold={self.load_threshold:.3f} load_frames={self.load_frames}'
-                     f' load_support={self.load_support:.3f}'
-                     f' load_support_frames={self.load_support_frames}')
-        if self.load_fast_threshold > 0:
-            text += (f' load_fast_threshold={self.load_fast_threshold:.3f}'
-                     f' load_fast_frames={self.load_fast_frames}'
-                     f' load_fast_support={self.load_fast_support:.3f}'
-                     f' load_fast_support_frames={self.load_fast_support_frames}')
+        for path in self._load_paths_on():
+            for name, value in zip(path, self._values(path)):
+                text += f' {name}={value:.3f}' if isinstance(value, float) else f' {name}={value}'
         return text
 
     def short(self) -> str:
@@ -153,13 +147,19 @@ class DecisionRule:
             text += f' or mean{self.sustain_frames}>={self.sustain_threshold:g}'
         if self.evidence_threshold > 0:
             text += f' or sum(p-{self.evidence_drift:g})>={self.evidence_threshold:g}'
-        if self.load_threshold > 0:
-            text += (f' or load>={self.load_threshold:g}N x{self.load_frames}'
-                     f' & mean{self.load_support_frames}>={self.load_support:g}')
-        if self.load_fast_threshold > 0:
-            text += (f' or load>={self.load_fast_threshold:g}N x{self.load_fast_frames}'
-                     f' & mean{self.load_fast_support_frames}>={self.load_fast_support:g}')
+        for path in self._load_paths_on():
+            threshold, frames, support, support_frames = self._values(path)
+            text += (f' or load>={threshold:g}N x{frames}'
+                     f' & mean{support_frames}>={support:g}')
         return text
+
+    def _load_paths_on(self) -> list:
+        """Return the field names of each load path that is on (threshold first)."""
+        return [names for names in (LOAD_FIELDS, LOAD_FAST_FIELDS) if getattr(self, names[0]) > 0]
+
+    def _values(self, names: tuple) -> tuple:
+        """Return the values of the fields ``names``."""
+        return tuple(getattr(self, name) for name in names)
 
     @property
     def uses_load(self) -> bool:
@@ -180,9 +180,9 @@ class DecisionRule:
         before it existed are stored as they were.
         """
         data = dataclasses.asdict(self)
-        for names, threshold in ((LOAD_FIELDS, self.load_threshold),
-                                 (LOAD_FAST_FIELDS, self.load_fast_threshold)):
-            if threshold <= 0:
+        on = self._load_paths_on()
+        for names in (LOAD_FIELDS, LOAD_FAST_FIELDS):
+            if names not in on:
                 for name in names:
                     del data[name]
         return data

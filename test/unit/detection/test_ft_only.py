@@ -21,7 +21,7 @@ gap restarts and time jumps are those of the multimodal path; audio is ignored, 
 
 from typing import Optional
 
-from bundle_support import toy_bundle
+from bundle_support import lasting_change_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector, run_features
 from contact_detector.errors import ConfigError
@@ -46,12 +46,7 @@ STEP_S = 4.0
 
 def _bundle() -> ModelBundle:
     # A forest that says contact when force_shift_min > 1 N: a lasting change of the load.
-    rng = np.random.default_rng(0)
-    x = np.abs(rng.normal(size=(3000, CONFIG.n_features)))
-    col = CONFIG.feature_names.index('force_shift_min')
-    x[:, col] = rng.uniform(0, 3, size=3000)
-    y = (x[:, col] > 1.0).astype(int)
-    return toy_bundle(config=CONFIG, x=x, y=y, created='2026-11-23T00:00:00+00:00')
+    return lasting_change_bundle(config=CONFIG, n=3000, created='2026-11-23T00:00:00+00:00')
 
 
 @pytest.fixture(scope='module')

@@ -24,7 +24,7 @@ beside the model's columns and gives the forest only its own.
 
 from dataclasses import replace
 
-from bundle_support import toy_bundle
+from bundle_support import lasting_change_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ConfigError, ModelError
@@ -43,12 +43,7 @@ LOAD = {'load_threshold': 2.0, 'load_frames': 20, 'load_support': 0.0, 'load_sup
 
 
 def _bundle(config: FeatureConfig) -> ModelBundle:
-    rng = np.random.default_rng(0)
-    x = np.abs(rng.normal(size=(4000, config.n_features)))
-    lasting = config.feature_names.index('force_shift_min')
-    x[:, lasting] = rng.uniform(0, 3, size=4000)
-    y = (x[:, lasting] > 1.0).astype(int)
-    return toy_bundle(config=config, x=x, y=y, created='2026-11-28T00:00:00+00:00')
+    return lasting_change_bundle(config=config, n=4000, created='2026-11-28T00:00:00+00:00')
 
 
 @pytest.fixture(scope='module')
