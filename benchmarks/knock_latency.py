@@ -43,9 +43,9 @@ from collections import defaultdict
 from pathlib import Path
 import sys
 
-from contact_detector.detection.release import ReleaseLogic
+from contact_detector.detection.release import ReleaseLogic, rule_inputs
 from contact_detector.evaluation.metrics import score_trial
-from contact_detector.features.config import LOAD_FEATURE
+from contact_detector.features.config import RULE_FEATURES
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
@@ -70,7 +70,7 @@ def newest_knock_before(truth) -> float:
 def frames_config(bundle):
     """Return the model's feature configuration with the load path's column."""
     config = bundle.feature_config
-    return config.with_extra((LOAD_FEATURE,)) if config.measures_carried else config
+    return config.with_extra(RULE_FEATURES) if config.measures_carried else config
 
 
 def release_path(*, rule, p: np.ndarray, i: int) -> str:
@@ -90,14 +90,13 @@ def trial_rows(*, bundle, frames) -> list:
     names = frames_config(bundle).feature_names
     n_model = bundle.feature_config.n_features
     col = names.index('force_change_max') if 'force_change_max' in names else None
-    load_col = names.index(LOAD_FEATURE) if LOAD_FEATURE in names else None
     rows = []
     for name, f in sorted(frames.items()):
         p = forest.predict_proba(f.x[:, :n_model]) if f.x.shape[0] else np.zeros(0)
         logic = ReleaseLogic(rule=rule, armed=True)
         _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
                                  blocked=f.t < f.t0 + WARMUP_S,
-                                 load=None if load_col is None else f.x[:, load_col])
+                                 **rule_inputs(names=names, x=f.x))
         out = score_trial(truth=f.truth, releases=releases, events=list(logic.last_events))
         onset = f.truth.onset_t
         path = '-'

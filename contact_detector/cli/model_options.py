@@ -124,7 +124,7 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
 def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
                              help_text: str) -> None:
     """
-    Add one load path's four options, ``--{field}-threshold`` and the rest.
+    Add one load path's five options, ``--{field}-threshold`` and the rest.
 
     Their defaults are None: :func:`rule_from_args` fills in the model kind's.
     """
@@ -143,6 +143,10 @@ def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
                         help=f'default {default("support"):g}')
     parser.add_argument(f'{option}-support-frames', type=int, default=None,
                         help=f'default {default("support_frames")}')
+    parser.add_argument(f'{option}-direction', type=float, default=None, metavar='COS',
+                        help='direction gate: the path also needs the cosine between the '
+                             'change of the force and the carried load <= COS (1 = off; '
+                             f'default {default("direction"):g})')
 
 
 def tree_counts(text: str) -> list:

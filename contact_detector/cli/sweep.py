@@ -189,6 +189,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--load-support', type=float, default=DecisionRule.load_support)
     parser.add_argument('--load-support-frames', type=int,
                         default=DecisionRule.load_support_frames)
+    parser.add_argument('--load-direction', type=float, default=DecisionRule.load_direction,
+                        metavar='COS', help='the load path also needs the cosine between the '
+                        'change of the force and the carried load <= COS (default 1: off)')
     parser.add_argument('--load-fast-threshold', type=float, default=0.0, metavar='N',
                         help='with --load-threshold: the scored rule also has the fast load '
                              'path, the same test with its own --load-fast-* distance, frames '
@@ -198,6 +201,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         default=DecisionRule.load_fast_support)
     parser.add_argument('--load-fast-support-frames', type=int,
                         default=DecisionRule.load_fast_support_frames)
+    parser.add_argument('--load-fast-direction', type=float,
+                        default=DecisionRule.load_fast_direction, metavar='COS',
+                        help='the direction gate of the fast load path, as --load-direction')
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)

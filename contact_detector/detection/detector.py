@@ -30,7 +30,7 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
 from contact_detector.features.carried import CarriedLoad
-from contact_detector.features.config import LOAD_FEATURE
+from contact_detector.features.config import LOAD_DIRECTION_FEATURE, LOAD_FEATURE, RULE_FEATURES
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
@@ -240,14 +240,16 @@ class ContactDetector:
         config = bundle.feature_config
         self.ft_only = config.ft_only
         # A model that measures the carried load also gets the distance of the force from it
-        # (force_carried_shift), the load path's input, computed by the same feature core; the
-        # forest reads only the model's own columns, the first n_model.
+        # (force_carried_shift) and the direction of the force's change (force_carried_cos),
+        # the load paths' inputs, computed by the same feature core; the forest reads only the
+        # model's own columns, the first n_model.
         self._n_model = config.n_features
         if config.measures_carried:
-            config = config.with_extra((LOAD_FEATURE,))
+            config = config.with_extra(RULE_FEATURES)
             self._load_col: Optional[int] = config.feature_names.index(LOAD_FEATURE)
+            self._cos_col: Optional[int] = config.feature_names.index(LOAD_DIRECTION_FEATURE)
         else:
-            self._load_col = None
+            self._load_col = self._cos_col = None
         self.rule = self.check_rule(settings.rule or bundle.decision_rule)
         try:
             self.forest = bundle.compile()
@@ -503,9 +505,11 @@ class ContactDetector:
         if self._warm_until is None:
             self._warm_until = float(frames.t[0]) + self.settings.warmup_s
         blocked = (frames.t < self._warm_until) | (frames.t < self._holdoff_until)
-        load = None if self._load_col is None else frames.x[:, self._load_col]
+        load = cos = None
+        if self._load_col is not None:
+            load, cos = frames.x[:, self._load_col], frames.x[:, self._cos_col]
         contact, releases = self.logic.step(t=frames.t, p=p, valid=valid, blocked=blocked,
-                                            load=load)
+                                            load=load, load_cos=cos)
         self.counts['frames'] += n
         self.counts['invalid_frames'] += int(n - valid.sum())
         self.counts['events'] = self.logic.events
@@ -529,8 +533,11 @@ class ContactDetector:
         if self._warm_until is None:
             self._warm_until = t + self.settings.warmup_s
         blocked = t < self._warm_until or t < self._holdoff_until
-        load = 0.0 if self._load_col is None else float(x[self._load_col])
-        contact, releases = self.logic.step_one(t=t, p=p, ok=valid and not blocked, load=load)
+        load, cos = 0.0, math.nan
+        if self._load_col is not None:
+            load, cos = float(x[self._load_col]), float(x[self._cos_col])
+        contact, releases = self.logic.step_one(t=t, p=p, ok=valid and not blocked, load=load,
+                                                load_cos=cos)
         self.counts['frames'] += 1
         self.counts['invalid_frames'] += int(not valid)
         self.counts['events'] = self.logic.events

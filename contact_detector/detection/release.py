@@ -21,9 +21,10 @@ Pure state machine, no ROS, no clock: frame times are passed in.
 from collections import deque
 from itertools import islice, repeat
 import math
-from typing import Any, Dict, Mapping, Optional
+from typing import Any, Dict, Mapping, Optional, Sequence
 
 from contact_detector.errors import ConfigError
+from contact_detector.features.config import RULE_FEATURES
 from contact_detector.model.rule import DecisionRule
 import numpy as np
 
@@ -42,10 +43,12 @@ RULE_PARAMETERS = {
     'release.load_frames': ('load_frames', 1),
     'release.load_support': ('load_support', 0.0),
     'release.load_support_frames': ('load_support_frames', 1),
+    'release.load_direction': ('load_direction', -1.0),
     'release.load_fast_threshold': ('load_fast_threshold', 0.0),
     'release.load_fast_frames': ('load_fast_frames', 1),
     'release.load_fast_support': ('load_fast_support', 0.0),
     'release.load_fast_support_frames': ('load_fast_support_frames', 1),
+    'release.load_fast_direction': ('load_fast_direction', -1.0),
 }
 
 
@@ -79,6 +82,29 @@ def rule_overrides(params: Mapping[str, Any]) -> Dict[str, Any]:
         if value >= lowest:
             out[field] = value
     return out
+
+
+def rule_inputs(*, names: Sequence[str], x: np.ndarray) -> Dict[str, Optional[np.ndarray]]:
+    """
+    Return the columns of a frame matrix that :meth:`ReleaseLogic.step` reads beside P.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The names of the columns of ``x``.
+    x : np.ndarray, shape (n, len(names))
+        Feature frames.
+
+    Returns
+    -------
+    dict
+        ``load`` (``force_carried_shift``, N) and ``load_cos`` (``force_carried_shift_cos``), each
+        shape (n,), or None where ``names`` lacks the column: keyword arguments of
+        :meth:`ReleaseLogic.step`.
+
+    """
+    return {key: (x[:, list(names).index(name)] if name in names else None)
+            for key, name in zip(('load', 'load_cos'), RULE_FEATURES)}
 
 
 class ReleaseLogic:
@@ -141,8 +167,8 @@ class ReleaseLogic:
         """Allow (True) or forbid (False) the next release."""
         self.armed = bool(armed)
 
-    def _is_contact(self, p: float, load: float) -> bool:
-        """Push one valid frame's probability and load; return whether it is contact."""
+    def _is_contact(self, p: float, load: float, cos: float) -> bool:
+        """Push one valid frame's probability, load and cosine; return whether it is contact."""
         rule = self.rule
         recent = self._recent
         recent.append(p)
@@ -150,7 +176,9 @@ class ReleaseLogic:
             recent.popleft()
         evidence = self._evidence + p - rule.evidence_drift
         self._evidence = evidence if evidence > 0.0 else 0.0
-        # not >= on the negation: a NaN load never counts
+        # not >= on the negation: a NaN load never counts, and a NaN cosine passes only a gate
+        # that is off (1). A cosine of exactly 0 is the feature's value without a carried
+        # load (a tared sensor): the gates judge only a direction there is.
         self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
         self._load_fast_run = self._load_fast_run + 1 if load >= rule.load_fast_threshold else 0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
@@ -158,10 +186,13 @@ class ReleaseLogic:
         if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
             return True
         if rule.load_threshold > 0 and self._load_run >= rule.load_frames \
-                and self._mean_of_last(rule.load_support_frames) >= rule.load_support:
+                and self._mean_of_last(rule.load_support_frames) >= rule.load_support \
+                and (rule.load_direction >= 1.0 or cos <= rule.load_direction or cos == 0.0):
             return True
         if rule.load_fast_threshold > 0 and self._load_fast_run >= rule.load_fast_frames \
-                and self._mean_of_last(rule.load_fast_support_frames) >= rule.load_fast_support:
+                and self._mean_of_last(rule.load_fast_support_frames) >= rule.load_fast_support \
+                and (rule.load_fast_direction >= 1.0 or cos <= rule.load_fast_direction
+                     or cos == 0.0):
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
@@ -177,7 +208,8 @@ class ReleaseLogic:
 
     def step(self, *, t: np.ndarray, p: np.ndarray, valid: np.ndarray,
              blocked: Optional[np.ndarray] = None,
-             load: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:
+             load: Optional[np.ndarray] = None,
+             load_cos: Optional[np.ndarray] = None) -> tuple[np.ndarray, list]:
         """
         Decide a block of frames.
 
@@ -194,6 +226,10 @@ class ReleaseLogic:
         load : np.ndarray, shape (n,), optional
             The distance of the force from the carried load per frame, N
             (``force_carried_shift``); the load path's input. None: the load path never fires.
+        load_cos : np.ndarray, shape (n,), optional
+            The cosine between the force's distance from the carried load and the carried load
+            per frame (``force_carried_shift_cos``); the direction gates' input. None: a load
+            path with a gate (< 1) never fires.
 
         Returns
         -------
@@ -213,14 +249,16 @@ class ReleaseLogic:
         self.last_events = []
         loads = (repeat(0.0) if load is None
                  else np.asarray(load, dtype=np.float64).tolist())
-        for i, (ti, pi, oki, li) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
-                                                  np.asarray(p, dtype=np.float64).tolist(),
-                                                  ok.tolist(), loads)):
-            contact[i] = self._frame(ti, pi, oki, releases, li)
+        cosines = (repeat(math.nan) if load_cos is None
+                   else np.asarray(load_cos, dtype=np.float64).tolist())
+        for i, (ti, pi, oki, li, ci) in enumerate(zip(np.asarray(t, dtype=np.float64).tolist(),
+                                                      np.asarray(p, dtype=np.float64).tolist(),
+                                                      ok.tolist(), loads, cosines)):
+            contact[i] = self._frame(ti, pi, oki, releases, li, ci)
         return contact, releases
 
-    def step_one(self, *, t: float, p: float, ok: bool,
-                 load: float = 0.0) -> tuple[bool, list]:
+    def step_one(self, *, t: float, p: float, ok: bool, load: float = 0.0,
+                 load_cos: float = math.nan) -> tuple[bool, list]:
         """
         Decide one frame: :meth:`step` for scalars.
 
@@ -234,6 +272,8 @@ class ReleaseLogic:
             Valid and not blocked.
         load : float
             The distance of the force from the carried load, N (:meth:`step`'s ``load``).
+        load_cos : float
+            The cosine of the direction gates (:meth:`step`'s ``load_cos``).
 
         Returns
         -------
@@ -244,9 +284,11 @@ class ReleaseLogic:
         """
         releases: list = []
         self.last_events = []
-        return self._frame(float(t), float(p), bool(ok), releases, float(load)), releases
+        return (self._frame(float(t), float(p), bool(ok), releases, float(load),
+                            float(load_cos)), releases)
 
-    def _frame(self, t: float, p: float, ok: bool, releases: list, load: float) -> bool:
+    def _frame(self, t: float, p: float, ok: bool, releases: list, load: float,
+               cos: float) -> bool:
         """Advance the state machine by one frame; return whether it is contact."""
         if not ok:
             self._recent.clear()
@@ -255,7 +297,7 @@ class ReleaseLogic:
             self._load_run = 0
             self._load_fast_run = 0
             return False
-        if not self._is_contact(p, load):
+        if not self._is_contact(p, load, cos):
             self._run = 0
             return False
         self._run += 1

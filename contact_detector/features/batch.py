@@ -197,8 +197,13 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
             # the distance from the carried load, and its minimum over shift_min_frames frames
             distances.append([math.sqrt(sum((new_v[a] - carried[a]) ** 2 for a in axes))
                               for axes in ((0, 1, 2), (3, 4, 5))])
-            for k, side in enumerate(('force', 'torque')):
+            for k, (axes, side) in enumerate((((0, 1, 2), 'force'), ((3, 4, 5), 'torque'))):
                 derived[f'{side}_carried_shift'] = distances[-1][k]
+                size = math.sqrt(sum(carried[a] ** 2 for a in axes))
+                dot = sum((new_v[a] - carried[a]) * carried[a] for a in axes)
+                scale = distances[-1][k] * size if size >= floors[k] else 0.0
+                derived[f'{side}_carried_shift_cos'] = (min(1.0, max(-1.0, dot / scale))
+                                                        if scale > 0 else 0.0)
                 derived[f'{side}_carried_shift_min'] = min(
                     d[k] for d in distances[-config.shift_min_frames:])
             for name, frames in (('min', config.shift_min_frames),

@@ -92,6 +92,12 @@ PAPER_FEATURES = (
 #: newest ``shift_min_frames`` F/T feature frames. Like the shifts, a length that does not
 #: depend on how the sensor is mounted; a constant bias cancels, as the carried load is read by
 #: the same sensor.
+#: ``*_carried_shift_cos`` is the direction of that distance: the cosine between ``mean of the
+#: newest delta_window vectors - carried load`` and the carried load (-1: the load came off,
+#: as the table takes it off an untared sensor; 0 for a push across it, and 0 when the carried
+#: load is below the floor or the distance is 0). Unlike ``*_carried_cos`` it describes the
+#: whole change since the arming, not the newest one, so it does not turn with the noise once
+#: a change has settled.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -125,6 +131,8 @@ EXTRA_FEATURES = (
     'torque_carried_shift',
     'force_carried_shift_min',
     'torque_carried_shift_min',
+    'force_carried_shift_cos',
+    'torque_carried_shift_cos',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -139,7 +147,8 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
                   'torque_change_hold', 'force_shift_hold', 'torque_shift_hold',
                   'force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
                   'torque_carried_cos', 'ft_carried_lever', 'force_carried_shift',
-                  'torque_carried_shift', 'force_carried_shift_min', 'torque_carried_shift_min')
+                  'torque_carried_shift', 'force_carried_shift_min', 'torque_carried_shift_min',
+                  'force_carried_shift_cos', 'torque_carried_shift_cos')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -169,12 +178,25 @@ CARRIED_DERIVED = ('ft_carried_lever',)
 CARRIED_SHIFT_FEATURES = ('force_carried_shift', 'torque_carried_shift',
                           'force_carried_shift_min', 'torque_carried_shift_min')
 
+#: The direction of the distance from the carried load: the cosine between it and the carried
+#: load (-1 when the load came off, 0 across it).
+CARRIED_SHIFT_COS_FEATURES = ('force_carried_shift_cos', 'torque_carried_shift_cos')
+
 #: Every feature that needs the carried load (measured after a start or an arming).
-NEEDS_CARRIED = CARRIED_FEATURES + CARRIED_DERIVED + CARRIED_SHIFT_FEATURES
+NEEDS_CARRIED = (CARRIED_FEATURES + CARRIED_DERIVED + CARRIED_SHIFT_FEATURES
+                 + CARRIED_SHIFT_COS_FEATURES)
 
 #: The column the load path of a decision rule reads: the distance of the force from the
 #: carried load, N.
 LOAD_FEATURE = 'force_carried_shift'
+
+#: The column the load paths' direction gate reads: the cosine between the force's distance
+#: from the carried load and the carried load.
+LOAD_DIRECTION_FEATURE = 'force_carried_shift_cos'
+
+#: The columns a decision rule reads beside P(contact), in :func:`ReleaseLogic.step`'s order
+#: (``load``, ``load_cos``); a configuration that measures the carried load computes both.
+RULE_FEATURES = (LOAD_FEATURE, LOAD_DIRECTION_FEATURE)
 
 #: :attr:`FeatureConfig.carried_window`, ``carried_floor_force`` and ``carried_floor_torque``
 #: when not given: left out of :meth:`FeatureConfig.to_dict` like ``hold_frames``. 50 samples

@@ -28,7 +28,8 @@ from contact_detector.errors import InputError
 from contact_detector.features import spectral
 from contact_detector.features.buffers import column_windows, running_max, TailBuffer
 from contact_detector.features.carried import CarriedLoad, measure_carried_load
-from contact_detector.features.config import (CARRIED_SHIFT_FEATURES, CHANGE_FEATURES,
+from contact_detector.features.config import (CARRIED_SHIFT_COS_FEATURES,
+                                              CARRIED_SHIFT_FEATURES, CHANGE_FEATURES,
                                               DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
                                               NEEDS_CARRIED, PAPER_FEATURES, SHIFT_FEATURES)
 from contact_detector.features.deltas import (carried_lever, relative_to_carried, vector_shift,
@@ -111,7 +112,9 @@ class ForceTorqueStream:
         self._recent_holds = TailBuffer(capacity=config.hold_frames, width=4)
         # (force, torque) distance from the carried load of the frames before the newest, for
         # *_carried_shift_min
-        self._want_carried_shift = bool(wanted & set(CARRIED_SHIFT_FEATURES))
+        self._want_carried_cos = bool(wanted & set(CARRIED_SHIFT_COS_FEATURES))
+        self._want_carried_shift = bool(wanted & set(CARRIED_SHIFT_FEATURES)) \
+            or self._want_carried_cos
         self._want_carried_min = bool(wanted & set(CARRIED_SHIFT_FEATURES[2:]))
         self._recent_carried_shifts = TailBuffer(capacity=config.shift_min_frames, width=2)
         self._angles = [angle for angle in (('ft_delta_angle', 'force_delta', 'torque_delta'),
@@ -420,9 +423,16 @@ class ForceTorqueStream:
                     derived['ft_carried_lever'] = carried_lever(rel=rel)
                     if self._want_carried_shift:
                         # the same length as the shift's, against the carried load
-                        distance = vector_shift(change=recent_v - carried)
+                        away = recent_v - carried
+                        distance = vector_shift(change=away)
                         derived['force_carried_shift'], derived['torque_carried_shift'] = \
                             distance.T
+                        if self._want_carried_cos:
+                            # the cosine of relative_to_carried, for the whole change
+                            _, cos = relative_to_carried(change=away, shift=distance,
+                                                         carried=carried, floor=self._floor)
+                            derived['force_carried_shift_cos'], \
+                                derived['torque_carried_shift_cos'] = cos.T
                         if self._want_carried_min:
                             low_c = self._carried_shift_min(distance)
                             derived['force_carried_shift_min'], \

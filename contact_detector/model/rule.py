@@ -30,10 +30,11 @@ import numpy as np
 
 
 #: The load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
-LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_frames')
+LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_frames',
+               'load_direction')
 #: The fast load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
 LOAD_FAST_FIELDS = ('load_fast_threshold', 'load_fast_frames', 'load_fast_support',
-                    'load_fast_support_frames')
+                    'load_fast_support_frames', 'load_fast_direction')
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,14 @@ class DecisionRule:
         The backing the load path needs: the mean P(contact) of the newest
         ``load_support_frames`` frames ``>= load_support``. A knock on the hand does not hold
         the load away for ``load_frames``; a push that does, the forest calls no contact.
+    load_direction : float
+        The load path's direction gate, in [-1, 1] (1 = off): the frame's
+        ``force_carried_shift_cos``, the cosine between the force's distance from the carried
+        load and the carried load, must be ``<= load_direction``. A table takes the load off
+        the hand, against the carried load (near -1 on an untared sensor); a person pushing
+        the object sideways moves the force across it (near 0), pressing it down along it
+        (+1). Exactly 0 also passes: it is the feature's value when no carried load was
+        measured (a tared sensor), where the gate has no direction to judge.
     load_fast_threshold, load_fast_frames, load_fast_support, load_fast_support_frames
         Fast load path (0 N = off): the load path again, for a load change well beyond a brush
         or a touch: the force ``>= load_fast_threshold`` N from the carried load for the
@@ -77,6 +86,8 @@ class DecisionRule:
         ``load_fast_support_frames`` frames ``>= load_fast_support`` (float, int). A large,
         held change needs fewer frames to tell from a knock's push and rebound than a small
         one, if the forest backs it more strongly.
+    load_fast_direction : float
+        The fast load path's direction gate, as ``load_direction`` (1 = off).
 
     """
 
@@ -92,10 +103,12 @@ class DecisionRule:
     load_frames: int = 20
     load_support: float = 0.15
     load_support_frames: int = 25
+    load_direction: float = 1.0
     load_fast_threshold: float = 0.0
     load_fast_frames: int = 3
     load_fast_support: float = 0.3
     load_fast_support_frames: int = 5
+    load_fast_direction: float = 1.0
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
@@ -105,7 +118,9 @@ class DecisionRule:
                                 ('evidence_drift', 0.0, 1.0),
                                 ('load_threshold', 0.0, 1000.0), ('load_support', 0.0, 1.0),
                                 ('load_fast_threshold', 0.0, 1000.0),
-                                ('load_fast_support', 0.0, 1.0)):
+                                ('load_fast_support', 0.0, 1.0),
+                                ('load_direction', -1.0, 1.0),
+                                ('load_fast_direction', -1.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
@@ -148,9 +163,11 @@ class DecisionRule:
         if self.evidence_threshold > 0:
             text += f' or sum(p-{self.evidence_drift:g})>={self.evidence_threshold:g}'
         for path in self._load_paths_on():
-            threshold, frames, support, support_frames = self._values(path)
+            threshold, frames, support, support_frames, direction = self._values(path)
             text += (f' or load>={threshold:g}N x{frames}'
                      f' & mean{support_frames}>={support:g}')
+            if direction < 1.0:
+                text += f' & cos<={direction:g}'
         return text
 
     def _load_paths_on(self) -> list:
@@ -165,6 +182,11 @@ class DecisionRule:
     def uses_load(self) -> bool:
         """Return True when a load path is on (it needs ``force_carried_shift`` per frame)."""
         return self.load_threshold > 0 or self.load_fast_threshold > 0
+
+    @property
+    def uses_direction(self) -> bool:
+        """Return True when an active load path has a direction gate (``force_carried_cos``)."""
+        return any(getattr(self, names[-1]) < 1.0 for names in self._load_paths_on())
 
     @property
     def load_history(self) -> int:

@@ -180,6 +180,9 @@ PARAMS: Sequence[ParamSpec] = (
               'the decision rule of the model.', -1.0, 1.0, read_only=False),
     ParamSpec('release.load_support_frames', 0, 'Frames of that mean; 0 = the decision rule '
               'of the model.', 0, 1000, read_only=False),
+    ParamSpec('release.load_direction', -2.0, 'Direction gate of the load path: it also needs '
+              'the cosine between the change of the force and the carried load <= this (1 = '
+              'off); below -1 = the decision rule of the model.', -2.0, 1.0, read_only=False),
     ParamSpec('release.load_fast_threshold', -1.0, 'Fast load path: the load path again with '
               'its own distance, frames and backing, for large load changes, N (0 = off; needs '
               'a model with carried-load features); negative = the decision rule of the model.',
@@ -191,6 +194,9 @@ PARAMS: Sequence[ParamSpec] = (
               'negative = the decision rule of the model.', -1.0, 1.0, read_only=False),
     ParamSpec('release.load_fast_support_frames', 0, 'Frames of that mean; 0 = the decision '
               'rule of the model.', 0, 1000, read_only=False),
+    ParamSpec('release.load_fast_direction', -2.0, 'Direction gate of the fast load path, as '
+              'release.load_direction; below -1 = the decision rule of the model.', -2.0, 1.0,
+              read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',

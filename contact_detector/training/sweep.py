@@ -28,11 +28,11 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_features
-from contact_detector.detection.release import ReleaseLogic
+from contact_detector.detection.release import ReleaseLogic, rule_inputs
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.metrics import frame_labels, score_trial, summarize, Truth
 from contact_detector.evaluation.truth import conditions_of, truth_for
-from contact_detector.features.config import FeatureConfig, LOAD_FEATURE
+from contact_detector.features.config import FeatureConfig, RULE_FEATURES
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
@@ -145,7 +145,7 @@ def score_model(*, bundle: ModelBundle, events_by_trial: Dict[str, tuple], name:
     """
     config = bundle.feature_config
     if config.measures_carried:
-        config = config.with_extra((LOAD_FEATURE,))
+        config = config.with_extra(RULE_FEATURES)
     frames = compute_frames(events_by_trial=events_by_trial, config=config,
                             audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=jobs)
     setting = FeatureSetting(name, config, LabelWindow(**bundle.label_window),
@@ -233,14 +233,14 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
 
     ``forest`` is a fitted ``RandomForestClassifier`` or a :class:`CompiledForest` (e.g.
     ``bundle.compile()`` of an npz model); both give the same probabilities. A rule with the
-    load path reads the setting's ``force_carried_shift`` column (ConfigError without one).
+    load path reads the setting's ``force_carried_shift`` and ``force_carried_cos`` columns
+    (ConfigError without them).
     """
     cols = _columns(setting)
     names = setting.config.feature_names
-    load_col = names.index(LOAD_FEATURE) if LOAD_FEATURE in names else None
-    if load_col is None and any(rule.uses_load for rule in rules):
-        raise ConfigError(f'a rule with the load path needs the {LOAD_FEATURE} column, which '
-                          f'setting {setting.name} does not compute')
+    if any(rule.uses_load for rule in rules) and not set(RULE_FEATURES) <= set(names):
+        raise ConfigError(f'a rule with the load path needs the {" and ".join(RULE_FEATURES)} '
+                          f'columns, which setting {setting.name} does not compute')
     probs = [_p_contact(forest, f.x[:, cols]) if f.x.shape[0] else np.zeros(0)
              for f in frames]
     labels = [frame_labels(t=f.t, onsets=[f.truth.onset_t], start_s=setting.label.start_s,
@@ -254,7 +254,7 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
             logic = ReleaseLogic(rule=rule, armed=True)
             contact, releases = logic.step(
                 t=f.t, p=p, valid=np.ones(f.t.size, bool), blocked=f.t < f.t0 + warmup_s,
-                load=None if load_col is None else f.x[:, load_col])
+                **rule_inputs(names=names, x=f.x))
             events = list(logic.last_events)
             outcomes.append(score_trial(truth=f.truth, releases=releases, events=events))
             pred.append(contact)

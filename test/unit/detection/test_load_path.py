@@ -51,8 +51,15 @@ def bundle() -> ModelBundle:
     return _bundle(CONFIG)
 
 
-def _events(*, ramp_s: float = 1.5, knock: bool = False) -> list:
-    """Return wrench messages: 5 N held along -z, the table taking 3 N over ``ramp_s`` from 3 s."""
+def _events(*, ramp_s: float = 1.5, knock: bool = False, push: bool = False,
+            tared: bool = False) -> list:
+    """
+    Return wrench messages: 5 N held along -z, the table taking 3 N over ``ramp_s`` from 3 s.
+
+    ``knock``: a 30 ms, 10 N knock along -z at 3 s instead; ``push``: a hand pushing the object
+    sideways (3 N along x over ``ramp_s``) instead of the table; ``tared``: the sensor was
+    zeroed with the object in the hand, so it reads no carried load.
+    """
     rng = np.random.default_rng(1)
     n = int(6.0 * RATE)
     t = T0 + np.arange(n) / RATE
@@ -61,8 +68,12 @@ def _events(*, ramp_s: float = 1.5, knock: bool = False) -> list:
     force[:, 2] -= 5.0
     if knock:
         force[(t - T0 >= START_S) & (t - T0 < START_S + 0.03), 2] -= 10.0
+    elif push:
+        force[:, 0] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
     else:
         force[:, 2] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
+    if tared:
+        force[:, 2] += 5.0
     return [WrenchEvent(t=t[i:i + 1], force=force[i:i + 1], torque=torque[i:i + 1],
                         now=float(t[i]) + 0.002) for i in range(n)]
 
@@ -122,3 +133,23 @@ def test_the_fast_load_path_reads_the_same_distance_sooner(bundle, in_blocks):
     assert alone.releases == run.releases
     # and holds a 30 ms knock back when it must be held for 5 frames
     assert _run(bundle, _events(knock=True), **{**fast, 'load_fast_frames': 5}).releases == []
+
+
+@pytest.mark.parametrize('in_blocks', [True, False])
+def test_the_direction_gate_tells_the_table_from_a_sideways_push(bundle, in_blocks):
+    # a long, unbacked hold: 1 N from the carried load for 0.1 s
+    hold = {'load_fast_threshold': 1.0, 'load_fast_frames': 10, 'load_fast_support': 0.0,
+            'load_fast_support_frames': 1}
+    gated = {**hold, 'load_fast_direction': -0.4}
+    # the table takes the load off against the carried load: the gate lets it through
+    table = _run(bundle, _events(), in_blocks=in_blocks, **hold)
+    assert table.releases == [pytest.approx(T0 + START_S + 0.5 + 0.1, abs=0.03)]
+    assert _run(bundle, _events(), in_blocks=in_blocks, **gated).releases == table.releases
+    # a push across the carried load moves the force as far, and only the ungated hold fires
+    assert len(_run(bundle, _events(push=True), in_blocks=in_blocks, **hold).releases) == 1
+    assert _run(bundle, _events(push=True), in_blocks=in_blocks, **gated).releases == []
+    # a tared sensor measured no carried load: the gate has no direction to judge there
+    pushed = _events(push=True, tared=True)
+    ungated = _run(bundle, pushed, in_blocks=in_blocks, **hold).releases
+    assert len(ungated) == 1
+    assert _run(bundle, pushed, in_blocks=in_blocks, **gated).releases == ungated

@@ -23,7 +23,7 @@ import pytest
 HOP = 0.01
 
 
-def _run(rule, p, *, valid=None, pieces=None, armed=True, load=None):
+def _run(rule, p, *, valid=None, pieces=None, armed=True, load=None, cos=None):
     """Feed ``p`` (one frame per 10 ms) in one call, or cut at the indices in ``pieces``."""
     p = np.asarray(p, dtype=float)
     t = np.arange(p.size) * HOP
@@ -33,7 +33,8 @@ def _run(rule, p, *, valid=None, pieces=None, armed=True, load=None):
     contact, releases, events = [], [], []
     for a, b in zip(cuts, cuts[1:]):
         c, r = logic.step(t=t[a:b], p=p[a:b], valid=valid[a:b],
-                          load=None if load is None else np.asarray(load, float)[a:b])
+                          load=None if load is None else np.asarray(load, float)[a:b],
+                          load_cos=None if cos is None else np.asarray(cos, float)[a:b])
         contact.append(c)
         releases += r
         events += logic.last_events
@@ -250,5 +251,65 @@ def test_fast_load_path_rule_fields():
                            'release.load_fast_support': -1.0}) == {'load_fast_threshold': 5.0}
     for bad in ({'load_fast_threshold': -1.0}, {'load_fast_frames': 0},
                 {'load_fast_support': 1.5}, {'load_fast_support_frames': 0}):
+        with pytest.raises(ConfigError, match=next(iter(bad))):
+            DecisionRule(**bad)
+
+
+GATED_RULE = replace_rule(FAST_RULE, load_fast_direction=-0.4)
+
+
+def test_direction_gate_passes_only_a_change_against_the_carried_load():
+    p = [0.35] * 40
+    load = [0.0] * 10 + [6.0] * 30
+    # the table taking the load off (cosine near -1): as without the gate, frame 12
+    assert _run(GATED_RULE, p, load=load, cos=[-0.9] * 40)[1] == [pytest.approx(12 * HOP)]
+    # a push across the load (cosine near 0) shuts the gated fast path; the ungated load path
+    # still releases after its 20 frames
+    assert _run(GATED_RULE, p, load=load, cos=[0.05] * 40)[1] == [pytest.approx(29 * HOP)]
+    assert _run(GATED_RULE, p, load=load, cos=[-0.3] * 40)[1] == [pytest.approx(29 * HOP)]
+    # the gate reads each frame's cosine: it opens on the frame the change turns against
+    assert _run(GATED_RULE, p, load=load, cos=[0.1] * 20 + [-0.5] * 20,
+                pieces=[7, 21])[1] == [pytest.approx(20 * HOP)]
+    # exactly 0 is the cosine without a carried load (a tared sensor): nothing to judge
+    assert _run(GATED_RULE, p, load=load, cos=[0.0] * 40)[1] == [pytest.approx(12 * HOP)]
+    # no cosine, or a NaN one, never passes a gate that is on, and always one that is off
+    assert _run(GATED_RULE, p, load=load)[1] == [pytest.approx(29 * HOP)]
+    assert _run(GATED_RULE, p, load=load, cos=[float('nan')] * 40)[1] == [
+        pytest.approx(29 * HOP)]
+    assert _run(FAST_RULE, p, load=load, cos=[float('nan')] * 40)[1] == [
+        pytest.approx(12 * HOP)]
+    # a gate on the load path itself
+    gated_load = replace_rule(LOAD_RULE, load_direction=-0.4)
+    assert _run(gated_load, [0.2] * 40, load=load, cos=[0.5] * 40)[1] == []
+    assert _run(gated_load, [0.2] * 40, load=load, cos=[-1.0] * 40)[1] == [
+        pytest.approx(14 * HOP)]
+
+
+def test_step_one_reads_the_cosine_as_step_does():
+    p = [0.35] * 40
+    load = [0.0] * 10 + [6.0] * 30
+    cos = [0.2] * 15 + [-0.8] * 25
+    logic = ReleaseLogic(rule=GATED_RULE, armed=True)
+    fired = [i for i in range(40)
+             if logic.step_one(t=i * HOP, p=p[i], ok=True, load=load[i], load_cos=cos[i])[1]]
+    assert fired == [15]
+    assert _run(GATED_RULE, p, load=load, cos=cos)[1] == [pytest.approx(15 * HOP)]
+
+
+def test_direction_gate_rule_fields():
+    assert GATED_RULE.short().endswith(' or load>=5N x3 & mean5>=0.3 & cos<=-0.4')
+    assert GATED_RULE.uses_direction and not FAST_RULE.uses_direction
+    # a gate on a path that is off asks nothing of the model
+    assert not replace_rule(LOAD_RULE, load_fast_direction=-0.4).uses_direction
+    assert DecisionRule.from_dict(GATED_RULE.to_dict()) == GATED_RULE
+    assert GATED_RULE.to_dict()['load_fast_direction'] == -0.4
+    assert 'load_fast_direction' not in LOAD_RULE.to_dict()
+    # a rule stored before the gate existed loads with the gate off
+    stored = {k: v for k, v in FAST_RULE.to_dict().items() if not k.endswith('direction')}
+    assert DecisionRule.from_dict(stored) == FAST_RULE
+    assert rule_overrides({'release.load_direction': -2.0,
+                           'release.load_fast_direction': -0.4}) == {'load_fast_direction': -0.4}
+    for bad in ({'load_direction': 1.5}, {'load_fast_direction': -1.01},
+                {'load_fast_direction': float('nan')}, {'load_direction': True}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)

@@ -466,6 +466,38 @@ def test_carried_shift_does_not_depend_on_sensor_orientation_or_bias():
             np.testing.assert_allclose(got[k], ref[k], atol=1e-9)
 
 
+SHIFT_COS_CONFIG = FeatureConfig(
+    extra_features=('force_carried_cos', 'force_carried_shift', 'force_carried_shift_cos',
+                    'torque_carried_shift_cos'), delta_window=1)
+
+
+def test_carried_shift_cosine_keeps_the_direction_of_a_settled_change():
+    # the table takes 3 N off a 6 N weight (-1), a hand pushes the object sideways (0) or down
+    # (+1), each for good from sample 80, under 0.02 N of sensor noise. Once the change has
+    # settled, the newest change is noise and its cosine (force_carried_cos) turns with it; the
+    # cosine of the whole distance from the carried load keeps the change's direction
+    n = 200
+    rng = np.random.default_rng(3)
+    for direction, want in (([1.0, 0, 0], -1.0), ([0, 3 / 5, 4 / 5], 0.0), ([-1.0, 0, 0], 1.0)):
+        force, torque = _carried_load(n)
+        force[80:] += 3.0 * np.array(direction)
+        force += rng.normal(scale=0.02, size=force.shape)
+        stream = ForceTorqueStream(config=SHIFT_COS_CONFIG, input_rate=100.0)
+        ft, x = stream.push(t=T0 + np.arange(n) / 100, force=force,
+                            torque=np.cross([0.0, 0.0, 0.15], force))
+        late = x[np.round((ft - T0) * 100) >= 150, -4:]
+        np.testing.assert_allclose(late[:, 2], want, atol=0.02)
+        np.testing.assert_allclose(late[:, 3], want, atol=0.05)
+        assert np.ptp(late[:, 0]) > 0.5                  # the newest change's cosine wanders
+    # a tared sensor has no carried load to compare with: 0
+    force, torque = _carried_load(n)
+    force[80:, 0] += 3.0
+    stream = ForceTorqueStream(config=SHIFT_COS_CONFIG, input_rate=100.0)
+    _, x = stream.push(t=T0 + np.arange(n) / 100, force=force - force[0],
+                       torque=np.zeros((n, 3)))
+    assert x[-1, -3] == pytest.approx(3.0) and x[-1, -2:].tolist() == [0.0, 0.0]
+
+
 def test_carried_shift_min_tells_a_lasting_transfer_from_a_knock():
     # the 20 ms knock of 8 N that rings back, against the 3 N touch: both are far from the
     # carried load while they last; 10 frames later only the touch is
@@ -585,6 +617,7 @@ configs = st.builds(
         ('audio_hold_db',), ('audio_peak_rel_db', 'audio_hold_db', 'force_shift'),
         ('force_carried_shift', 'torque_carried_shift_min'),
         ('torque_carried_shift', 'force_carried_shift_min', 'force_shift_rel'),
+        ('force_carried_shift_cos', 'torque_shift'), ('torque_carried_shift_cos',),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
