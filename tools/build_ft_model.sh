@@ -23,7 +23,11 @@
 # event-weight-screen.md); the load path on top of that rule: also release when the force
 # has stayed 2 N from the load carried at the arming for 20 frames (0.2 s) and the mean
 # P(contact) of the last 25 frames is at least 0.15 (chosen on fresh trials of the two
-# independent generators and left out, docs/decisions/2026-11-28-ft-only-load-path.md).
+# independent generators and left out, docs/decisions/2026-11-28-ft-only-load-path.md); and the
+# second load path as a gated hold: also release when the force has stayed 2 N from the
+# carried load for 40 frames (0.4 s) with no backing, while it points against the carried load
+# (force_carried_shift_cos <= -0.4) or the sensor is tared (the contacts the forest vetoes:
+# fixtures, pegs, soft surfaces; docs/decisions/2026-11-28-ft-only-direction-gated-hold.md).
 # Arm the node while the hand holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
@@ -52,6 +56,8 @@ fi
   --ft-window 64 --ft-detrend mean --delta-window 1 --label-start 0.03 \
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
   --load-threshold 2 --load-frames 20 --load-support 0.15 --load-support-frames 25 \
+  --load2-threshold 2 --load2-frames 40 --load2-support 0 --load2-support-frames 1 \
+  --load2-direction -0.4 \
   --augment --augment-tare 0.5 --augment-torque 0.333,3 \
   --event-weight 1 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

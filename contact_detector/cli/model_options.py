@@ -22,7 +22,7 @@ import argparse
 from typing import Callable, Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
-from contact_detector.model.rule import DecisionRule, LOAD_FAST_FIELDS, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_RULE,
@@ -116,9 +116,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                   'carried at the start or arming for --load-frames frames and the mean '
                   'P(contact) of --load-support-frames frames >= --load-support')
     _add_load_path_arguments(
-        parser, field='load_fast',
-        help_text='fast load path: the load path again with its own --load-fast-* distance, '
-                  'frames and backing')
+        parser, field='load2',
+        help_text="second load path: the load path's test with its own --load2-* distance, "
+                  'frames, backing and direction gate')
 
 
 def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
@@ -145,7 +145,8 @@ def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
                         help=f'default {default("support_frames")}')
     parser.add_argument(f'{option}-direction', type=float, default=None, metavar='COS',
                         help='direction gate: the path also needs the cosine between the '
-                             'change of the force and the carried load <= COS (1 = off; '
+                             "force's distance from the carried load and the carried load "
+                             '<= COS, or exactly 0 (a tared sensor) (1 = off; '
                              f'default {default("direction"):g})')
 
 
@@ -172,7 +173,7 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
     """
     kind = DEFAULT_FT_ONLY_RULE if getattr(args, 'no_audio', False) else DEFAULT_RULE
     load = {name: (getattr(kind, name) if getattr(args, name, None) is None
-                   else getattr(args, name)) for name in LOAD_FIELDS + LOAD_FAST_FIELDS}
+                   else getattr(args, name)) for name in LOAD_FIELDS + LOAD2_FIELDS}
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,

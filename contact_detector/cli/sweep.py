@@ -59,7 +59,7 @@ from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.rule import DecisionRule, LOAD_FAST_FIELDS, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
@@ -191,19 +191,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         default=DecisionRule.load_support_frames)
     parser.add_argument('--load-direction', type=float, default=DecisionRule.load_direction,
                         metavar='COS', help='the load path also needs the cosine between the '
-                        'change of the force and the carried load <= COS (default 1: off)')
-    parser.add_argument('--load-fast-threshold', type=float, default=0.0, metavar='N',
-                        help='with --load-threshold: the scored rule also has the fast load '
-                             'path, the same test with its own --load-fast-* distance, frames '
-                             'and backing (default 0: off)')
-    parser.add_argument('--load-fast-frames', type=int, default=DecisionRule.load_fast_frames)
-    parser.add_argument('--load-fast-support', type=float,
-                        default=DecisionRule.load_fast_support)
-    parser.add_argument('--load-fast-support-frames', type=int,
-                        default=DecisionRule.load_fast_support_frames)
-    parser.add_argument('--load-fast-direction', type=float,
-                        default=DecisionRule.load_fast_direction, metavar='COS',
-                        help='the direction gate of the fast load path, as --load-direction')
+                        "force's distance from the carried load and the carried load <= COS, "
+                        'or exactly 0 (a tared sensor) (default 1: off)')
+    parser.add_argument('--load2-threshold', type=float, default=0.0, metavar='N',
+                        help='with --load-threshold: the scored rule also has the second '
+                             'load path, the same test with its own --load2-* distance, '
+                             'frames, backing and direction gate (default 0: off)')
+    parser.add_argument('--load2-frames', type=int, default=DecisionRule.load2_frames)
+    parser.add_argument('--load2-support', type=float,
+                        default=DecisionRule.load2_support)
+    parser.add_argument('--load2-support-frames', type=int,
+                        default=DecisionRule.load2_support_frames)
+    parser.add_argument('--load2-direction', type=float,
+                        default=DecisionRule.load2_direction, metavar='COS',
+                        help='the direction gate of the second load path, as --load-direction')
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
@@ -322,11 +323,11 @@ def with_model(args) -> str:
 def load_fields(args: argparse.Namespace) -> Optional[dict]:
     """Return the load paths' DecisionRule fields from the options (validated), or None."""
     if args.load_threshold <= 0:
-        if args.load_fast_threshold > 0:
-            raise ConfigError('--load-fast-threshold needs --load-threshold: the scored rule '
+        if args.load2_threshold > 0:
+            raise ConfigError('--load2-threshold needs --load-threshold: the scored rule '
                               'adds both load paths')
         return None
-    fields = {name: getattr(args, name) for name in LOAD_FIELDS + LOAD_FAST_FIELDS}
+    fields = {name: getattr(args, name) for name in LOAD_FIELDS + LOAD2_FIELDS}
     DecisionRule(**fields)          # ConfigError naming a bad value
     return fields
 

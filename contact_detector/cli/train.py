@@ -120,7 +120,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     labels = labels_from_args(args)
     rule = rule_from_args(args)
     if rule.uses_load and not config.measures_carried:
-        raise ConfigError('--load-threshold and --load-fast-threshold need the carried load: '
+        raise ConfigError('--load-threshold and --load2-threshold need the carried load: '
                           'add a carried-load feature (e.g. force_shift_rel) to '
                           '--extra-features, or set both to 0')
     # An F/T-only model (--no-audio) trains on recordings without an audio topic too.

@@ -330,9 +330,9 @@ class ContactDetector:
         if rule.uses_load and self._load_col is None:
             raise ConfigError(
                 f'the load paths (load_threshold {rule.load_threshold:g} N, '
-                f'load_fast_threshold {rule.load_fast_threshold:g} N) need the carried load, '
+                f'load2_threshold {rule.load2_threshold:g} N) need the carried load, '
                 f'which model {self.bundle.model_id} does not measure (it has no carried-load '
-                'feature); set release.load_threshold and release.load_fast_threshold to 0')
+                'feature); set release.load_threshold and release.load2_threshold to 0')
         return rule
 
     # --- input -----------------------------------------------------------------------------

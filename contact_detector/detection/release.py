@@ -44,11 +44,11 @@ RULE_PARAMETERS = {
     'release.load_support': ('load_support', 0.0),
     'release.load_support_frames': ('load_support_frames', 1),
     'release.load_direction': ('load_direction', -1.0),
-    'release.load_fast_threshold': ('load_fast_threshold', 0.0),
-    'release.load_fast_frames': ('load_fast_frames', 1),
-    'release.load_fast_support': ('load_fast_support', 0.0),
-    'release.load_fast_support_frames': ('load_fast_support_frames', 1),
-    'release.load_fast_direction': ('load_fast_direction', -1.0),
+    'release.load2_threshold': ('load2_threshold', 0.0),
+    'release.load2_frames': ('load2_frames', 1),
+    'release.load2_support': ('load2_support', 0.0),
+    'release.load2_support_frames': ('load2_support_frames', 1),
+    'release.load2_direction': ('load2_direction', -1.0),
 }
 
 
@@ -126,9 +126,9 @@ class ReleaseLogic:
       ``>= rule.load_threshold`` in the newest ``rule.load_frames`` consecutive frames, and
       the mean P(contact) of the newest ``rule.load_support_frames`` frames is
       ``>= rule.load_support``, or
-    - ``rule.load_fast_threshold > 0`` (the fast load path) and the same holds with
-      ``rule.load_fast_threshold``, ``rule.load_fast_frames``, ``rule.load_fast_support`` and
-      ``rule.load_fast_support_frames``.
+    - ``rule.load2_threshold > 0`` (the second load path) and the same holds with
+      ``rule.load2_threshold``, ``rule.load2_frames``, ``rule.load2_support``,
+      ``rule.load2_support_frames`` and ``rule.load2_direction``.
 
     The means, the evidence and the load runs need consecutive valid, unblocked frames: an
     invalid or blocked frame empties the history, the evidence and the runs. A contact *event*
@@ -161,7 +161,7 @@ class ReleaseLogic:
         self._recent.clear()
         self._evidence = 0.0
         self._load_run = 0
-        self._load_fast_run = 0
+        self._load2_run = 0
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
@@ -180,7 +180,7 @@ class ReleaseLogic:
         # that is off (1). A cosine of exactly 0 is the feature's value without a carried
         # load (a tared sensor): the gates judge only a direction there is.
         self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
-        self._load_fast_run = self._load_fast_run + 1 if load >= rule.load_fast_threshold else 0
+        self._load2_run = self._load2_run + 1 if load >= rule.load2_threshold else 0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
             return True
         if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
@@ -189,9 +189,9 @@ class ReleaseLogic:
                 and self._mean_of_last(rule.load_support_frames) >= rule.load_support \
                 and (rule.load_direction >= 1.0 or cos <= rule.load_direction or cos == 0.0):
             return True
-        if rule.load_fast_threshold > 0 and self._load_fast_run >= rule.load_fast_frames \
-                and self._mean_of_last(rule.load_fast_support_frames) >= rule.load_fast_support \
-                and (rule.load_fast_direction >= 1.0 or cos <= rule.load_fast_direction
+        if rule.load2_threshold > 0 and self._load2_run >= rule.load2_frames \
+                and self._mean_of_last(rule.load2_support_frames) >= rule.load2_support \
+                and (rule.load2_direction >= 1.0 or cos <= rule.load2_direction
                      or cos == 0.0):
             return True
         return rule.sustain_frames > 0 and (
@@ -295,7 +295,7 @@ class ReleaseLogic:
             self._evidence = 0.0
             self._run = 0
             self._load_run = 0
-            self._load_fast_run = 0
+            self._load2_run = 0
             return False
         if not self._is_contact(p, load, cos):
             self._run = 0

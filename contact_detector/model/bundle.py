@@ -177,8 +177,8 @@ class ModelBundle:
                              f'{type(self.decision_rule).__name__}')
         if self.decision_rule.uses_load and not self.feature_config.measures_carried:
             raise ModelError('ModelBundle.decision_rule has a load path on (load_threshold '
-                             f'{self.decision_rule.load_threshold:g} N, load_fast_threshold '
-                             f'{self.decision_rule.load_fast_threshold:g} N), which needs the '
+                             f'{self.decision_rule.load_threshold:g} N, load2_threshold '
+                             f'{self.decision_rule.load2_threshold:g} N), which needs the '
                              'carried load, but the feature config has no carried-load feature')
         self.feature_names = tuple(self.feature_names)
         if self.feature_names != self.feature_config.feature_names:

@@ -32,9 +32,9 @@ import numpy as np
 #: The load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
 LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_frames',
                'load_direction')
-#: The fast load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
-LOAD_FAST_FIELDS = ('load_fast_threshold', 'load_fast_frames', 'load_fast_support',
-                    'load_fast_support_frames', 'load_fast_direction')
+#: The second load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
+LOAD2_FIELDS = ('load2_threshold', 'load2_frames', 'load2_support', 'load2_support_frames',
+                'load2_direction')
 
 
 @dataclass(frozen=True)
@@ -79,15 +79,16 @@ class DecisionRule:
         the object sideways moves the force across it (near 0), pressing it down along it
         (+1). Exactly 0 also passes: it is the feature's value when no carried load was
         measured (a tared sensor), where the gate has no direction to judge.
-    load_fast_threshold, load_fast_frames, load_fast_support, load_fast_support_frames
-        Fast load path (0 N = off): the load path again, for a load change well beyond a brush
-        or a touch: the force ``>= load_fast_threshold`` N from the carried load for the
-        newest ``load_fast_frames`` frames (float, int), and the mean P(contact) of the newest
-        ``load_fast_support_frames`` frames ``>= load_fast_support`` (float, int). A large,
-        held change needs fewer frames to tell from a knock's push and rebound than a small
-        one, if the forest backs it more strongly.
-    load_fast_direction : float
-        The fast load path's direction gate, as ``load_direction`` (1 = off).
+    load2_threshold, load2_frames, load2_support, load2_support_frames
+        Second load path (0 N = off): the load path's test with its own values: the force
+        ``>= load2_threshold`` N from the carried load for the newest ``load2_frames`` frames
+        (float, int), and the mean P(contact) of the newest ``load2_support_frames`` frames
+        ``>= load2_support`` (float, int). The shipped F/T-only model uses it as a long hold
+        that needs no backing (2 N for 40 frames, 0.4 s, gated by ``load2_direction``): the
+        contacts its forest vetoes (fixtures, pegs, soft surfaces) hold the load off for
+        that long, a knock's push and rebound do not.
+    load2_direction : float
+        The second load path's direction gate, as ``load_direction`` (1 = off).
 
     """
 
@@ -104,11 +105,11 @@ class DecisionRule:
     load_support: float = 0.15
     load_support_frames: int = 25
     load_direction: float = 1.0
-    load_fast_threshold: float = 0.0
-    load_fast_frames: int = 3
-    load_fast_support: float = 0.3
-    load_fast_support_frames: int = 5
-    load_fast_direction: float = 1.0
+    load2_threshold: float = 0.0
+    load2_frames: int = 3
+    load2_support: float = 0.3
+    load2_support_frames: int = 5
+    load2_direction: float = 1.0
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
@@ -117,10 +118,10 @@ class DecisionRule:
                                 ('evidence_threshold', 0.0, 1000.0),
                                 ('evidence_drift', 0.0, 1.0),
                                 ('load_threshold', 0.0, 1000.0), ('load_support', 0.0, 1.0),
-                                ('load_fast_threshold', 0.0, 1000.0),
-                                ('load_fast_support', 0.0, 1.0),
+                                ('load2_threshold', 0.0, 1000.0),
+                                ('load2_support', 0.0, 1.0),
                                 ('load_direction', -1.0, 1.0),
-                                ('load_fast_direction', -1.0, 1.0)):
+                                ('load2_direction', -1.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
@@ -129,7 +130,7 @@ class DecisionRule:
             object.__setattr__(self, name, float(value))
         for name, low in (('confirm_frames', 1), ('average_frames', 1), ('sustain_frames', 0),
                           ('load_frames', 1), ('load_support_frames', 1),
-                          ('load_fast_frames', 1), ('load_fast_support_frames', 1)):
+                          ('load2_frames', 1), ('load2_support_frames', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
                     or value < low:
@@ -172,7 +173,7 @@ class DecisionRule:
 
     def _load_paths_on(self) -> list:
         """Return the field names of each load path that is on (threshold first)."""
-        return [names for names in (LOAD_FIELDS, LOAD_FAST_FIELDS) if getattr(self, names[0]) > 0]
+        return [names for names in (LOAD_FIELDS, LOAD2_FIELDS) if getattr(self, names[0]) > 0]
 
     def _values(self, names: tuple) -> tuple:
         """Return the values of the fields ``names``."""
@@ -181,7 +182,7 @@ class DecisionRule:
     @property
     def uses_load(self) -> bool:
         """Return True when a load path is on (it needs ``force_carried_shift`` per frame)."""
-        return self.load_threshold > 0 or self.load_fast_threshold > 0
+        return self.load_threshold > 0 or self.load2_threshold > 0
 
     @property
     def uses_direction(self) -> bool:
@@ -192,7 +193,7 @@ class DecisionRule:
     def load_history(self) -> int:
         """Return the most P(contact) frames the load paths average (0 when both are off)."""
         return max(self.load_support_frames if self.load_threshold > 0 else 0,
-                   self.load_fast_support_frames if self.load_fast_threshold > 0 else 0)
+                   self.load2_support_frames if self.load2_threshold > 0 else 0)
 
     def to_dict(self) -> dict:
         """
@@ -203,7 +204,7 @@ class DecisionRule:
         """
         data = dataclasses.asdict(self)
         on = self._load_paths_on()
-        for names in (LOAD_FIELDS, LOAD_FAST_FIELDS):
+        for names in (LOAD_FIELDS, LOAD2_FIELDS):
             if names not in on:
                 for name in names:
                     del data[name]

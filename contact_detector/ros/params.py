@@ -181,20 +181,21 @@ PARAMS: Sequence[ParamSpec] = (
     ParamSpec('release.load_support_frames', 0, 'Frames of that mean; 0 = the decision rule '
               'of the model.', 0, 1000, read_only=False),
     ParamSpec('release.load_direction', -2.0, 'Direction gate of the load path: it also needs '
-              'the cosine between the change of the force and the carried load <= this (1 = '
-              'off); below -1 = the decision rule of the model.', -2.0, 1.0, read_only=False),
-    ParamSpec('release.load_fast_threshold', -1.0, 'Fast load path: the load path again with '
-              'its own distance, frames and backing, for large load changes, N (0 = off; needs '
-              'a model with carried-load features); negative = the decision rule of the model.',
+              "the cosine between the force's distance from the carried load and the carried "
+              'load <= this, or exactly 0 (a tared sensor) (1 = off); below -1 = the decision '
+              'rule of the model.', -2.0, 1.0, read_only=False),
+    ParamSpec('release.load2_threshold', -1.0, "Second load path: the load path's test with "
+              'its own distance, frames, backing and direction gate, N (0 = off; needs a model '
+              'with carried-load features); negative = the decision rule of the model.',
               -1.0, 1000.0, read_only=False),
-    ParamSpec('release.load_fast_frames', 0, 'Frames the fast load path needs the force away '
+    ParamSpec('release.load2_frames', 0, 'Frames the second load path needs the force away '
               'from the carried load; 0 = the decision rule of the model.', 0, 1000,
               read_only=False),
-    ParamSpec('release.load_fast_support', -1.0, 'Mean P(contact) the fast load path needs; '
+    ParamSpec('release.load2_support', -1.0, 'Mean P(contact) the second load path needs; '
               'negative = the decision rule of the model.', -1.0, 1.0, read_only=False),
-    ParamSpec('release.load_fast_support_frames', 0, 'Frames of that mean; 0 = the decision '
+    ParamSpec('release.load2_support_frames', 0, 'Frames of that mean; 0 = the decision '
               'rule of the model.', 0, 1000, read_only=False),
-    ParamSpec('release.load_fast_direction', -2.0, 'Direction gate of the fast load path, as '
+    ParamSpec('release.load2_direction', -2.0, 'Direction gate of the second load path, as '
               'release.load_direction; below -1 = the decision rule of the model.', -2.0, 1.0,
               read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '

@@ -95,13 +95,18 @@ DEFAULT_RULE = DecisionRule(threshold=0.95, confirm_frames=1, refractory_s=1.0,
                             sustain_frames=15, sustain_threshold=0.4)
 #: The rule shipped before, slow path at 0.3: still scored by ``sweep --lofo`` for comparison.
 PREVIOUS_RULE = replace(DEFAULT_RULE, sustain_threshold=0.3)
-#: The shipped F/T-only model's rule, ``train --no-audio``'s default: the multimodal rule and the
+#: The shipped F/T-only model's rule, ``train --no-audio``'s default: the multimodal rule, the
 #: load path (the force held 2 N from the carried load for 0.2 s, backed by a mean P(contact) of
-#: 0.15 over 25 frames): on fresh trials of both independent generators it caught 173 of 320
-#: against 133 with one more early release, left out 16 early releases in 1080 against 10
-#: (docs/decisions/2026-11-28-ft-only-load-path.md).
+#: 0.15 over 25 frames; docs/decisions/2026-11-28-ft-only-load-path.md) and the second load path
+#: as a gated hold (the force held 2 N from the carried load for 0.4 s with no backing, while
+#: it points against the carried load, or on a tared sensor): on fresh seeds 3315/4415 of the
+#: independent generators 205 of 320 caught against 173, with 11 early releases against 9;
+#: left out 19 early in 1080 against 16 (docs/decisions/2026-11-28-ft-only-direction-gated-
+#: hold.md).
 DEFAULT_FT_ONLY_RULE = replace(DEFAULT_RULE, load_threshold=2.0, load_frames=20,
-                               load_support=0.15, load_support_frames=25)
+                               load_support=0.15, load_support_frames=25, load2_threshold=2.0,
+                               load2_frames=40, load2_support=0.0, load2_support_frames=1,
+                               load2_direction=-0.4)
 
 
 @dataclass(frozen=True)

@@ -431,15 +431,15 @@ def load_rules(*, base: DecisionRule, load: Optional[Dict[str, Any]]) -> List[De
     """
     Return the rules a study adds for the load paths' fields ``load`` (None: none).
 
-    ``base`` with the load path; when ``load`` turns the fast load path on as well, first
+    ``base`` with the load path; when ``load`` turns the second load path on as well, first
     ``base`` with the load path alone and then with both, so that one run scores what the
-    fast path adds on the same forests.
+    second path adds on the same forests.
     """
     if not load:
         return []
     rules = [replace(base, **load)]
-    if load.get('load_fast_threshold', 0.0) > 0:
-        rules.insert(0, replace(rules[0], load_fast_threshold=0.0))
+    if load.get('load2_threshold', 0.0) > 0:
+        rules.insert(0, replace(rules[0], load2_threshold=0.0))
     return rules
 
 

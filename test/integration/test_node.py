@@ -399,13 +399,13 @@ def test_parameters_at_run_time(harness_factory):
     rule = node.detector.rule
     assert rule.uses_load and (rule.load_threshold, rule.load_frames) == (2.0, 15)
     assert node.detector.logic.rule == rule
-    assert set_('release.load_fast_threshold', 5.0).successful
-    assert set_('release.load_fast_frames', 3).successful
+    assert set_('release.load2_threshold', 5.0).successful
+    assert set_('release.load2_frames', 3).successful
     rule = node.detector.rule
-    assert (rule.load_fast_threshold, rule.load_fast_frames) == (5.0, 3)
+    assert (rule.load2_threshold, rule.load2_frames) == (5.0, 3)
     assert 'load>=5N x3' in rule.short() and node.detector.logic.rule == rule
     assert set_('release.load_threshold', 0.0).successful
-    assert set_('release.load_fast_threshold', 0.0).successful
+    assert set_('release.load2_threshold', 0.0).successful
     assert not node.detector.rule.uses_load
 
 
@@ -420,7 +420,7 @@ def test_the_load_path_needs_a_model_that_measures_the_carried_load(context, tmp
     node = ContactDetectorNode(context=context, parameter_overrides=[
         Parameter('model.path', value=str(plain))])
     try:
-        for name in ('release.load_threshold', 'release.load_fast_threshold'):
+        for name in ('release.load_threshold', 'release.load2_threshold'):
             result = node.set_parameters([Parameter(name, value=2.0)])[0]
             assert not result.successful and 'carried' in result.reason
         assert not node.detector.rule.uses_load

@@ -90,14 +90,15 @@ def test_audio_disabled_in_params_picks_the_ft_model_for_audio_bags(tmp_path, ca
     assert len([r for r in _rows(out) if 'p' in r]) > 300
 
 
-def test_the_fast_load_path_from_params_releases_sooner_on_the_same_frames(no_audio, tmp_path):
-    # release.load_fast_* in --params turn the fast load path on for the shipped F/T-only
-    # model: the same P(contact) per frame, and the release sooner at 0.5 N held 1
-    # frame with no backing (the force leaves the carried load as the table takes it)
+def test_the_second_load_path_from_params_releases_sooner_on_the_same_frames(
+        no_audio, tmp_path):
+    # release.load2_* in --params change the shipped F/T-only model's second load path: the
+    # same P(contact) per frame, and the release sooner at 0.5 N held 1 frame with no backing
+    # (the force leaves the carried load as the table takes it) than at its 2 N for 0.4 s
     bag = no_audio / 'trial_0002'
     params = tmp_path / 'fast.yaml'
-    params.write_text('/**:\n  ros__parameters:\n    release:\n      load_fast_threshold: 0.5\n'
-                      '      load_fast_frames: 1\n      load_fast_support: 0.0\n')
+    params.write_text('/**:\n  ros__parameters:\n    release:\n      load2_threshold: 0.5\n'
+                      '      load2_frames: 1\n      load2_support: 0.0\n')
     shipped, fast = tmp_path / 's.jsonl', tmp_path / 'f.jsonl'
     assert cli_main.main(['detect', str(bag), '--out', str(shipped)]) == 0
     assert cli_main.main(['detect', str(bag), '--params', str(params), '--out', str(fast)]) == 0
@@ -149,7 +150,8 @@ def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path
     assert cli_main.main(['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1',
                           '--trees', '1', '--augment', '--label-start', '0',
                           '--event-weight', '2', '--augment-tare', '0.1',
-                          '--load-threshold', '0', '--out', str(model)]) == 0
+                          '--load-threshold', '0', '--load2-threshold', '0',
+                          '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     assert bundle.label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 2.0}
     assert not bundle.decision_rule.uses_load
@@ -159,14 +161,15 @@ def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path
 
 def test_train_no_audio_without_carried_features_needs_the_load_path_off(no_audio, tmp_path,
                                                                          capsys):
-    # --no-audio's rule has the load path, which needs the carried load: features without it
-    # are refused before any work, with the way out; with --load-threshold 0 they train
+    # --no-audio's rule has both load paths, which need the carried load: features without it
+    # are refused before any work, with the way out; with both thresholds 0 they train
     args = ['train', str(no_audio), '--no-audio', '--no-events', '--jobs', '1', '--trees', '1',
             '--extra-features', 'force_shift,torque_shift', '--out', str(tmp_path / 'x.npz')]
     assert cli_main.main(args) == 1
     err = capsys.readouterr().err
     assert 'need the carried load' in err and 'set both to 0' in err
-    assert cli_main.main(args + ['--load-threshold', '0']) == 0
+    assert cli_main.main(args + ['--load-threshold', '0']) == 1        # the second path too
+    assert cli_main.main(args + ['--load-threshold', '0', '--load2-threshold', '0']) == 0
     assert not load_bundle(path=tmp_path / 'x.npz').decision_rule.uses_load
 
 

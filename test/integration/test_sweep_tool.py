@@ -158,8 +158,8 @@ def test_the_fast_load_path_is_scored_after_the_load_path_alone(data, tmp_path, 
     out = tmp_path / 'fast.md'
     assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--jobs', '1',
                            '--load-threshold', '3', '--load-frames', '20', '--load-support', '0',
-                           '--load-fast-threshold', '0.5', '--load-fast-frames', '2',
-                           '--load-fast-support', '0', '--out', str(out)]) == 0
+                           '--load2-threshold', '0.5', '--load2-frames', '2',
+                           '--load2-support', '0', '--out', str(out)]) == 0
     table = _table(out.read_text())
     alone = load_bundle(path=data['model']).decision_rule.short() + ' or load>=3N x20 & mean25>=0'
     assert [table[1][1], table[2][1]] == [alone, alone + ' or load>=0.5N x2 & mean5>=0']
@@ -169,8 +169,8 @@ def test_the_fast_load_path_is_scored_after_the_load_path_alone(data, tmp_path, 
     assert fired(table[2]) >= fired(table[1])
     with pytest.raises(SystemExit):
         sweep_cli.main([str(data['bags']), '--model', str(data['model']),
-                        '--load-fast-threshold', '5'])
-    assert '--load-fast-threshold needs --load-threshold' in capsys.readouterr().err
+                        '--load2-threshold', '5'])
+    assert '--load2-threshold needs --load-threshold' in capsys.readouterr().err
 
 
 def test_own_test_needs_a_model(data, capsys):

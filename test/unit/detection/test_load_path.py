@@ -124,23 +124,23 @@ def test_a_model_without_the_carried_load_refuses_the_load_path():
 def test_the_fast_load_path_reads_the_same_distance_sooner(bundle, in_blocks):
     # 1 N of the 3 N is off at 0.5 s into the ramp; held for 3 frames after that, long before
     # the load path's 2 N held for 0.2 s
-    fast = {'load_fast_threshold': 1.0, 'load_fast_frames': 3, 'load_fast_support': 0.0,
-            'load_fast_support_frames': 5}
+    fast = {'load2_threshold': 1.0, 'load2_frames': 3, 'load2_support': 0.0,
+            'load2_support_frames': 5}
     run = _run(bundle, _events(), in_blocks=in_blocks, **LOAD, **fast)
     assert run.releases == [pytest.approx(T0 + START_S + 0.5 + 0.03, abs=0.03)]
     # the fast path alone is a load path too: it needs the carried-load column
     alone = _run(bundle, _events(), in_blocks=in_blocks, **fast)
     assert alone.releases == run.releases
     # and holds a 30 ms knock back when it must be held for 5 frames
-    assert _run(bundle, _events(knock=True), **{**fast, 'load_fast_frames': 5}).releases == []
+    assert _run(bundle, _events(knock=True), **{**fast, 'load2_frames': 5}).releases == []
 
 
 @pytest.mark.parametrize('in_blocks', [True, False])
 def test_the_direction_gate_tells_the_table_from_a_sideways_push(bundle, in_blocks):
     # a long, unbacked hold: 1 N from the carried load for 0.1 s
-    hold = {'load_fast_threshold': 1.0, 'load_fast_frames': 10, 'load_fast_support': 0.0,
-            'load_fast_support_frames': 1}
-    gated = {**hold, 'load_fast_direction': -0.4}
+    hold = {'load2_threshold': 1.0, 'load2_frames': 10, 'load2_support': 0.0,
+            'load2_support_frames': 1}
+    gated = {**hold, 'load2_direction': -0.4}
     # the table takes the load off against the carried load: the gate lets it through
     table = _run(bundle, _events(), in_blocks=in_blocks, **hold)
     assert table.releases == [pytest.approx(T0 + START_S + 0.5 + 0.1, abs=0.03)]

@@ -202,8 +202,8 @@ def test_load_path_rule_fields():
             DecisionRule(**bad)
 
 
-FAST_RULE = replace_rule(LOAD_RULE, load_frames=20, load_fast_threshold=5.0, load_fast_frames=3,
-                         load_fast_support=0.3, load_fast_support_frames=5)
+FAST_RULE = replace_rule(LOAD_RULE, load_frames=20, load2_threshold=5.0, load2_frames=3,
+                         load2_support=0.3, load2_support_frames=5)
 
 
 def test_fast_load_path_releases_a_large_held_change_sooner():
@@ -211,7 +211,7 @@ def test_fast_load_path_releases_a_large_held_change_sooner():
     # frames held, the fast one 3 (frame 12), once its 5-frame mean is there
     p = [0.35] * 40
     load = [0.0] * 10 + [6.0] * 30
-    assert _run(replace_rule(FAST_RULE, load_fast_threshold=0.0), p, load=load)[1] == [
+    assert _run(replace_rule(FAST_RULE, load2_threshold=0.0), p, load=load)[1] == [
         pytest.approx(29 * HOP)]
     contact, releases, _ = _run(FAST_RULE, p, load=load)
     assert releases == [pytest.approx(12 * HOP)]
@@ -239,23 +239,23 @@ def test_fast_load_path_rule_fields():
     assert FAST_RULE.short() == ('p>=0.95 x1 or mean15>=0.4 or load>=2N x20 & mean8>=0.15'
                                  ' or load>=5N x3 & mean5>=0.3')
     assert FAST_RULE.uses_load and FAST_RULE.load_history == 8
-    alone = DecisionRule(threshold=0.95, load_fast_threshold=5.0, load_fast_frames=3,
-                         load_fast_support=0.3, load_fast_support_frames=5)
+    alone = DecisionRule(threshold=0.95, load2_threshold=5.0, load2_frames=3,
+                         load2_support=0.3, load2_support_frames=5)
     assert alone.uses_load and alone.load_history == 5
     # each path's fields are written only when it is on: the load path's rules stay as stored
-    assert 'load_fast_threshold' not in LOAD_RULE.to_dict()
-    assert 'load_threshold' not in alone.to_dict() and 'load_fast_frames' in alone.to_dict()
+    assert 'load2_threshold' not in LOAD_RULE.to_dict()
+    assert 'load_threshold' not in alone.to_dict() and 'load2_frames' in alone.to_dict()
     for rule in (FAST_RULE, alone):
         assert DecisionRule.from_dict(rule.to_dict()) == rule
-    assert rule_overrides({'release.load_fast_threshold': 5.0, 'release.load_fast_frames': 0,
-                           'release.load_fast_support': -1.0}) == {'load_fast_threshold': 5.0}
-    for bad in ({'load_fast_threshold': -1.0}, {'load_fast_frames': 0},
-                {'load_fast_support': 1.5}, {'load_fast_support_frames': 0}):
+    assert rule_overrides({'release.load2_threshold': 5.0, 'release.load2_frames': 0,
+                           'release.load2_support': -1.0}) == {'load2_threshold': 5.0}
+    for bad in ({'load2_threshold': -1.0}, {'load2_frames': 0},
+                {'load2_support': 1.5}, {'load2_support_frames': 0}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)
 
 
-GATED_RULE = replace_rule(FAST_RULE, load_fast_direction=-0.4)
+GATED_RULE = replace_rule(FAST_RULE, load2_direction=-0.4)
 
 
 def test_direction_gate_passes_only_a_change_against_the_carried_load():
@@ -300,16 +300,16 @@ def test_direction_gate_rule_fields():
     assert GATED_RULE.short().endswith(' or load>=5N x3 & mean5>=0.3 & cos<=-0.4')
     assert GATED_RULE.uses_direction and not FAST_RULE.uses_direction
     # a gate on a path that is off asks nothing of the model
-    assert not replace_rule(LOAD_RULE, load_fast_direction=-0.4).uses_direction
+    assert not replace_rule(LOAD_RULE, load2_direction=-0.4).uses_direction
     assert DecisionRule.from_dict(GATED_RULE.to_dict()) == GATED_RULE
-    assert GATED_RULE.to_dict()['load_fast_direction'] == -0.4
-    assert 'load_fast_direction' not in LOAD_RULE.to_dict()
+    assert GATED_RULE.to_dict()['load2_direction'] == -0.4
+    assert 'load2_direction' not in LOAD_RULE.to_dict()
     # a rule stored before the gate existed loads with the gate off
     stored = {k: v for k, v in FAST_RULE.to_dict().items() if not k.endswith('direction')}
     assert DecisionRule.from_dict(stored) == FAST_RULE
     assert rule_overrides({'release.load_direction': -2.0,
-                           'release.load_fast_direction': -0.4}) == {'load_fast_direction': -0.4}
-    for bad in ({'load_direction': 1.5}, {'load_fast_direction': -1.01},
-                {'load_fast_direction': float('nan')}, {'load_direction': True}):
+                           'release.load2_direction': -0.4}) == {'load2_direction': -0.4}
+    for bad in ({'load_direction': 1.5}, {'load2_direction': -1.01},
+                {'load2_direction': float('nan')}, {'load_direction': True}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)
