@@ -404,6 +404,14 @@ def test_parameters_at_run_time(harness_factory):
     rule = node.detector.rule
     assert (rule.load2_threshold, rule.load2_frames) == (5.0, 3)
     assert 'load>=5N x3' in rule.short() and node.detector.logic.rule == rule
+    # its direction gate: a cosine in [-1, 1]; below -1 hands it back to the model
+    assert not set_('release.load2_direction', 1.5).successful
+    assert set_('release.load2_direction', -0.4).successful
+    rule = node.detector.rule
+    assert rule.load2_direction == -0.4 and rule.uses_direction
+    assert rule.short().endswith('cos<=-0.4') and node.detector.logic.rule == rule
+    assert set_('release.load2_direction', -2.0).successful
+    assert node.detector.rule.load2_direction == base.load2_direction
     assert set_('release.load_threshold', 0.0).successful
     assert set_('release.load2_threshold', 0.0).successful
     assert not node.detector.rule.uses_load
