@@ -110,40 +110,49 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
                         help='evidence path: also contact when the sum of P(contact) - '
                              '--evidence-drift over consecutive frames reaches this (0 = off)')
     parser.add_argument('--evidence-drift', type=float, default=DEFAULT_RULE.evidence_drift)
-    _add_load_path_arguments(
+    add_load_path_arguments(
         parser, field='load',
         help_text='load path: also contact when the force has stayed this many N from the load '
                   'carried at the start or arming for --load-frames frames and the mean '
                   'P(contact) of --load-support-frames frames >= --load-support')
-    _add_load_path_arguments(
+    add_load_path_arguments(
         parser, field='load2',
         help_text="second load path: the load path's test with its own --load2-* distance, "
                   'frames, backing and direction gate')
 
 
-def _add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str,
-                             help_text: str) -> None:
+def add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str, help_text: str,
+                            defaults: Optional[DecisionRule] = None) -> None:
     """
     Add one load path's five options, ``--{field}-threshold`` and the rest.
 
-    Their defaults are None: :func:`rule_from_args` fills in the model kind's.
+    Without ``defaults`` (``train``) their defaults are None and :func:`rule_from_args` fills
+    in the model kind's; with ``defaults`` (``sweep``) each takes that rule's field.
     """
     option = '--' + field.replace('_', '-')
 
     def default(name: str) -> object:
-        return getattr(DEFAULT_FT_ONLY_RULE, f'{field}_{name}')
+        return getattr(defaults or DEFAULT_FT_ONLY_RULE, f'{field}_{name}')
 
-    parser.add_argument(f'{option}-threshold', type=float, default=None, metavar='N',
-                        help=f'{help_text} (0 = off; default '
-                             f'{getattr(DEFAULT_RULE, field + "_threshold"):g}; with '
-                             f'--no-audio {default("threshold"):g})')
-    parser.add_argument(f'{option}-frames', type=int, default=None,
+    def given(name: str) -> object:
+        return None if defaults is None else default(name)
+
+    if defaults is None:
+        threshold_help = (f'{help_text} (0 = off; default '
+                          f'{getattr(DEFAULT_RULE, field + "_threshold"):g}; with --no-audio '
+                          f'{default("threshold"):g})')
+    else:
+        threshold_help = f'{help_text} (default {default("threshold"):g}: off)'
+    parser.add_argument(f'{option}-threshold', type=float, default=given('threshold'),
+                        metavar='N', help=threshold_help)
+    parser.add_argument(f'{option}-frames', type=int, default=given('frames'),
                         help=f'default {default("frames")}')
-    parser.add_argument(f'{option}-support', type=float, default=None,
+    parser.add_argument(f'{option}-support', type=float, default=given('support'),
                         help=f'default {default("support"):g}')
-    parser.add_argument(f'{option}-support-frames', type=int, default=None,
+    parser.add_argument(f'{option}-support-frames', type=int, default=given('support_frames'),
                         help=f'default {default("support_frames")}')
-    parser.add_argument(f'{option}-direction', type=float, default=None, metavar='COS',
+    parser.add_argument(f'{option}-direction', type=float, default=given('direction'),
+                        metavar='COS',
                         help='direction gate: the path also needs the cosine between the '
                              "force's distance from the carried load and the carried load "
                              '<= COS, or exactly 0 (a tared sensor) (1 = off; '

@@ -53,6 +53,7 @@ from typing import List, Optional, Sequence
 
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.cli.model_options import (add_augmentation_arguments,
+                                                add_load_path_arguments,
                                                 augmentation_from_args)
 from contact_detector.errors import ConfigError, ContactDetectorError
 from contact_detector.evaluation.truth import knocked_in_air
@@ -179,32 +180,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='--model: also score, per folder, the trials with a knock on the '
                              'hand while the object is in the air (simulator manifests)')
     add_stream_arguments(parser)
-    parser.add_argument('--load-threshold', type=float, default=0.0, metavar='N',
-                        help="also score the shipped rule (--lofo) or the model's rule "
-                             '(--model) with the load path: contact when the force stayed '
-                             'N from the carried load for --load-frames frames and the mean '
-                             'P(contact) of --load-support-frames frames >= --load-support '
-                             '(default 0: not scored)')
-    parser.add_argument('--load-frames', type=int, default=DecisionRule.load_frames)
-    parser.add_argument('--load-support', type=float, default=DecisionRule.load_support)
-    parser.add_argument('--load-support-frames', type=int,
-                        default=DecisionRule.load_support_frames)
-    parser.add_argument('--load-direction', type=float, default=DecisionRule.load_direction,
-                        metavar='COS', help='the load path also needs the cosine between the '
-                        "force's distance from the carried load and the carried load <= COS, "
-                        'or exactly 0 (a tared sensor) (default 1: off)')
-    parser.add_argument('--load2-threshold', type=float, default=0.0, metavar='N',
-                        help='with --load-threshold: the scored rule also has the second '
-                             'load path, the same test with its own --load2-* distance, '
-                             'frames, backing and direction gate (default 0: off)')
-    parser.add_argument('--load2-frames', type=int, default=DecisionRule.load2_frames)
-    parser.add_argument('--load2-support', type=float,
-                        default=DecisionRule.load2_support)
-    parser.add_argument('--load2-support-frames', type=int,
-                        default=DecisionRule.load2_support_frames)
-    parser.add_argument('--load2-direction', type=float,
-                        default=DecisionRule.load2_direction, metavar='COS',
-                        help='the direction gate of the second load path, as --load-direction')
+    add_load_path_arguments(
+        parser, field='load', defaults=DecisionRule(),
+        help_text="also score the shipped rule (--lofo) or the model's rule (--model) with the "
+                  'load path: contact when the force stayed N from the carried load for '
+                  '--load-frames frames and the mean P(contact) of --load-support-frames '
+                  'frames >= --load-support')
+    add_load_path_arguments(
+        parser, field='load2', defaults=DecisionRule(),
+        help_text='with --load-threshold: the scored rule also has the second load path, the '
+                  'same test with its own --load2-* distance, frames, backing and direction '
+                  'gate')
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)

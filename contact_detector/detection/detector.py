@@ -240,7 +240,7 @@ class ContactDetector:
         config = bundle.feature_config
         self.ft_only = config.ft_only
         # A model that measures the carried load also gets the distance of the force from it
-        # (force_carried_shift) and the direction of the force's change (force_carried_cos),
+        # (force_carried_shift) and the direction of that distance (force_carried_shift_cos),
         # the load paths' inputs, computed by the same feature core; the forest reads only the
         # model's own columns, the first n_model.
         self._n_model = config.n_features

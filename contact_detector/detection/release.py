@@ -107,6 +107,17 @@ def rule_inputs(*, names: Sequence[str], x: np.ndarray) -> Dict[str, Optional[np
             for key, name in zip(('load', 'load_cos'), RULE_FEATURES)}
 
 
+def _gate_passes(gate: float, cos: float) -> bool:
+    """
+    Return whether a load path's direction gate lets a frame through.
+
+    ``gate >= 1`` is off (even a NaN ``cos`` passes); otherwise ``cos <= gate``, or exactly 0,
+    the value of ``force_carried_shift_cos`` when no carried load was measured (a tared
+    sensor): the gate judges only a direction there is. A NaN never passes a gate that is on.
+    """
+    return gate >= 1.0 or cos <= gate or cos == 0.0
+
+
 class ReleaseLogic:
     """
     Turn per-frame probabilities into contact decisions and release events.
@@ -176,9 +187,7 @@ class ReleaseLogic:
             recent.popleft()
         evidence = self._evidence + p - rule.evidence_drift
         self._evidence = evidence if evidence > 0.0 else 0.0
-        # not >= on the negation: a NaN load never counts, and a NaN cosine passes only a gate
-        # that is off (1). A cosine of exactly 0 is the feature's value without a carried
-        # load (a tared sensor): the gates judge only a direction there is.
+        # not >= on the negation: a NaN load never counts
         self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
         self._load2_run = self._load2_run + 1 if load >= rule.load2_threshold else 0
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
@@ -187,12 +196,11 @@ class ReleaseLogic:
             return True
         if rule.load_threshold > 0 and self._load_run >= rule.load_frames \
                 and self._mean_of_last(rule.load_support_frames) >= rule.load_support \
-                and (rule.load_direction >= 1.0 or cos <= rule.load_direction or cos == 0.0):
+                and _gate_passes(rule.load_direction, cos):
             return True
         if rule.load2_threshold > 0 and self._load2_run >= rule.load2_frames \
                 and self._mean_of_last(rule.load2_support_frames) >= rule.load2_support \
-                and (rule.load2_direction >= 1.0 or cos <= rule.load2_direction
-                     or cos == 0.0):
+                and _gate_passes(rule.load2_direction, cos):
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)

@@ -186,7 +186,7 @@ class DecisionRule:
 
     @property
     def uses_direction(self) -> bool:
-        """Return True when an active load path has a direction gate (``force_carried_cos``)."""
+        """Return True when an active load path has a gate (``force_carried_shift_cos``)."""
         return any(getattr(self, names[-1]) < 1.0 for names in self._load_paths_on())
 
     @property
