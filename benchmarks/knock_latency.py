@@ -45,7 +45,6 @@ import sys
 
 from contact_detector.detection.release import ReleaseLogic, rule_inputs
 from contact_detector.evaluation.metrics import score_trial
-from contact_detector.features.config import RULE_FEATURES
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
@@ -68,9 +67,8 @@ def newest_knock_before(truth) -> float:
 
 
 def frames_config(bundle):
-    """Return the model's feature configuration with the load path's column."""
-    config = bundle.feature_config
-    return config.with_extra(RULE_FEATURES) if config.measures_carried else config
+    """Return the model's feature configuration with the columns its rule reads."""
+    return bundle.feature_config.with_rule_columns()
 
 
 def release_path(*, rule, p: np.ndarray, i: int) -> str:

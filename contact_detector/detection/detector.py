@@ -30,7 +30,7 @@ from contact_detector.detection.release import ReleaseLogic
 from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
 from contact_detector.features.carried import CarriedLoad
-from contact_detector.features.config import LOAD_DIRECTION_FEATURE, LOAD_FEATURE, RULE_FEATURES
+from contact_detector.features.config import LOAD_DIRECTION_FEATURE, LOAD_FEATURE
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
@@ -244,12 +244,12 @@ class ContactDetector:
         # the load paths' inputs, computed by the same feature core; the forest reads only the
         # model's own columns, the first n_model.
         self._n_model = config.n_features
-        if config.measures_carried:
-            config = config.with_extra(RULE_FEATURES)
-            self._load_col: Optional[int] = config.feature_names.index(LOAD_FEATURE)
-            self._cos_col: Optional[int] = config.feature_names.index(LOAD_DIRECTION_FEATURE)
-        else:
-            self._load_col = self._cos_col = None
+        config = config.with_rule_columns()
+        names = config.feature_names
+        self._load_col: Optional[int] = (names.index(LOAD_FEATURE) if LOAD_FEATURE in names
+                                         else None)
+        self._cos_col: Optional[int] = (names.index(LOAD_DIRECTION_FEATURE)
+                                        if LOAD_DIRECTION_FEATURE in names else None)
         self.rule = self.check_rule(settings.rule or bundle.decision_rule)
         try:
             self.forest = bundle.compile()

@@ -429,6 +429,17 @@ class FeatureConfig:
         added = tuple(name for name in names if name not in self.extra_features)
         return replace(self, extra_features=self.extra_features + added) if added else self
 
+    def with_rule_columns(self) -> 'FeatureConfig':
+        """
+        Return this configuration with the columns a decision rule reads, where it can have them.
+
+        A configuration that measures the carried load gets :data:`RULE_FEATURES` appended
+        (:meth:`with_extra`): the load paths' distance from the carried load and its direction.
+        One without the carried load is returned as it is; a rule with a load path is refused
+        for it where the rule is checked.
+        """
+        return self.with_extra(RULE_FEATURES) if self.measures_carried else self
+
     @property
     def n_features(self) -> int:
         """Length of the feature vector."""

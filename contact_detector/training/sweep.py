@@ -143,9 +143,7 @@ def score_model(*, bundle: ModelBundle, events_by_trial: Dict[str, tuple], name:
     ``events_by_trial`` comes from :func:`decode_bags`; ``name`` labels the rows. A model that
     measures the carried load also gets the load path's column, as the detector computes it.
     """
-    config = bundle.feature_config
-    if config.measures_carried:
-        config = config.with_extra(RULE_FEATURES)
+    config = bundle.feature_config.with_rule_columns()
     frames = compute_frames(events_by_trial=events_by_trial, config=config,
                             audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=jobs)
     setting = FeatureSetting(name, config, LabelWindow(**bundle.label_window),
@@ -233,8 +231,8 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
 
     ``forest`` is a fitted ``RandomForestClassifier`` or a :class:`CompiledForest` (e.g.
     ``bundle.compile()`` of an npz model); both give the same probabilities. A rule with the
-    load path reads the setting's ``force_carried_shift`` and ``force_carried_cos`` columns
-    (ConfigError without them).
+    load path reads the setting's ``force_carried_shift`` and ``force_carried_shift_cos``
+    columns (ConfigError without them).
     """
     cols = _columns(setting)
     names = setting.config.feature_names
