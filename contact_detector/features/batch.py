@@ -26,8 +26,9 @@ from typing import Optional
 
 from contact_detector.features import spectral
 from contact_detector.features.config import (AUDIO_FEATURES, DELTA_FEATURES, FeatureConfig,
-                                              HOLD_FEATURES, NEEDS_CARRIED, SHIFT_FEATURES)
-from contact_detector.features.deltas import LEVER_EPS
+                                              HOLD_FEATURES, NEEDS_CARRIED, ROUGH_FEATURES,
+                                              SHIFT_FEATURES)
+from contact_detector.features.deltas import LEVER_EPS, ROUGH_FLOOR_N
 from contact_detector.features.force_torque import FT_SPECTRAL_COLUMNS
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.resample import integer_ratio, WrenchResampler
@@ -137,9 +138,13 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
     carried_names = set(NEEDS_CARRIED)
     # the vector shift's longer baseline only when a feature uses it: without one, the first
     # frames have too little history for it (its median would be of an empty slice)
-    shifted = bool(set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names))
+    shifted = bool(set(deltas) & (set(SHIFT_FEATURES) | set(HOLD_FEATURES) | carried_names
+                                  | set(ROUGH_FEATURES)))
     if shifted:
         need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
+    rough_wanted = bool(set(deltas) & set(ROUGH_FEATURES))
+    if rough_wanted:
+        need = max(need, config.shift_lag + config.rough_window + 2)
     if set(deltas) & carried_names:
         need = max(need, config.carried_window)
     # the carried load: the per-axis median of the first carried_window samples
@@ -186,6 +191,18 @@ def batch_ft_features(*, config: FeatureConfig, ft_t: np.ndarray, force: np.ndar
                      for axes in ((0, 1, 2), (3, 4, 5))]
             shifts.append(shift)
             derived['force_shift'], derived['torque_shift'] = shift
+            if rough_wanted:
+                # the RMS of the force's second difference over the newest rough_window
+                # samples, and over those ending shift_lag samples earlier
+                rough = []
+                for last in (end, end - config.shift_lag):
+                    total = 0.0
+                    for k in range(last - config.rough_window + 1, last + 1):
+                        total += sum((dec[k, a] - 2 * dec[k - 1, a] + dec[k - 2, a]) ** 2
+                                     for a in range(3))
+                    rough.append(math.sqrt(total / config.rough_window))
+                derived['force_roughness'] = rough[0]
+                derived['force_roughness_rel'] = rough[0] / max(rough[1], ROUGH_FLOOR_N)
             for k, (axes, side) in enumerate((((0, 1, 2), 'force'), ((3, 4, 5), 'torque'))):
                 size = math.sqrt(sum(carried[a] ** 2 for a in axes))
                 derived[f'{side}_shift_rel'] = shift[k] / max(size, floors[k])

@@ -98,6 +98,14 @@ PAPER_FEATURES = (
 #: load is below the floor or the distance is 0). Unlike ``*_carried_cos`` it describes the
 #: whole change since the arming, not the newest one, so it does not turn with the noise once
 #: a change has settled.
+#: ``force_roughness`` is the root mean square of the force vector's second difference over
+#: the newest ``rough_window`` F/T samples, ``sqrt(mean_k |F_k - 2 F_(k-1) + F_(k-2)|^2)`` (N):
+#: 0 for a constant or a linearly changing force, the sensor noise at rest, more while
+#: something rubs (stick-slip) or rings. ``force_roughness_rel`` divides it by the same value
+#: ``shift_lag`` samples earlier (floored at 0.05 N): how much rougher the force has become,
+#: whatever the sensor's noise and gain. A table that takes the load off changes it smoothly
+#: once the first ring-down has passed; the arm brushing something changes it by a force that
+#: fluctuates as it slips.
 EXTRA_FEATURES = (
     'audio_power_rel_db',
     'audio_peak_rel_db',
@@ -133,6 +141,8 @@ EXTRA_FEATURES = (
     'torque_carried_shift_min',
     'force_carried_shift_cos',
     'torque_carried_shift_cos',
+    'force_roughness',
+    'force_roughness_rel',
 )
 
 #: Features computed from the audio alone, in the order a pending frame stores them.
@@ -148,7 +158,8 @@ DELTA_FEATURES = ('force_delta', 'torque_delta', 'ft_delta_angle', 'force_change
                   'force_shift_rel', 'torque_shift_rel', 'force_carried_cos',
                   'torque_carried_cos', 'ft_carried_lever', 'force_carried_shift',
                   'torque_carried_shift', 'force_carried_shift_min', 'torque_carried_shift_min',
-                  'force_carried_shift_cos', 'torque_carried_shift_cos')
+                  'force_carried_shift_cos', 'torque_carried_shift_cos', 'force_roughness',
+                  'force_roughness_rel')
 
 #: The features that need the ``*_change`` values (against the baseline median).
 CHANGE_FEATURES = ('force_change', 'torque_change', 'ft_change_angle', 'force_change_max',
@@ -181,6 +192,10 @@ CARRIED_SHIFT_FEATURES = ('force_carried_shift', 'torque_carried_shift',
 #: The direction of the distance from the carried load: the cosine between it and the carried
 #: load (-1 when the load came off, 0 across it).
 CARRIED_SHIFT_COS_FEATURES = ('force_carried_shift_cos', 'torque_carried_shift_cos')
+
+#: The roughness of the force over the newest ``rough_window`` F/T samples, and against its
+#: roughness ``shift_lag`` samples earlier (computed with the vector shifts).
+ROUGH_FEATURES = ('force_roughness', 'force_roughness_rel')
 
 #: Every feature that needs the carried load (measured after a start or an arming).
 NEEDS_CARRIED = (CARRIED_FEATURES + CARRIED_DERIVED + CARRIED_SHIFT_FEATURES
@@ -217,6 +232,10 @@ DEFAULT_HOLD_FRAMES = 4
 #: every frame; 8 frames see a click's decay too. Left out of :meth:`FeatureConfig.to_dict`
 #: like ``hold_frames``, so older model hashes stay the same.
 DEFAULT_AUDIO_HOLD_FRAMES = 8
+
+#: :attr:`FeatureConfig.rough_window` when not given: 20 samples, 0.2 s at 100 Hz (a brush
+#: lasts 0.15-0.6 s). Left out of :meth:`FeatureConfig.to_dict` like ``hold_frames``.
+DEFAULT_ROUGH_WINDOW = 20
 
 WINDOW_FUNCTIONS = ('rect', 'hann')
 DETREND_MODES = ('none', 'mean')
@@ -292,6 +311,9 @@ class FeatureConfig:
     audio_hold_frames : int
         Audio frames over which ``audio_hold_db`` takes its minimum (default 8, 80 ms at the
         10 ms hop; written by :meth:`to_dict` only when it differs).
+    rough_window : int
+        F/T samples (at ``ft_rate_hz``) of second differences in ``force_roughness`` (default
+        20, 0.2 s at 100 Hz; written by :meth:`to_dict` only when it differs).
 
     Notes
     -----
@@ -329,6 +351,7 @@ class FeatureConfig:
     carried_floor_force: float = DEFAULT_CARRIED['carried_floor_force']
     carried_floor_torque: float = DEFAULT_CARRIED['carried_floor_torque']
     audio_hold_frames: int = DEFAULT_AUDIO_HOLD_FRAMES
+    rough_window: int = DEFAULT_ROUGH_WINDOW
 
     def __post_init__(self) -> None:
         """Validate every field; raise :class:`ConfigError` naming the bad one."""
@@ -345,7 +368,7 @@ class FeatureConfig:
                           ('rise_frames', 1), ('change_max_frames', 1),
                           ('shift_min_frames', 1), ('shift_lag', 1), ('shift_window', 1),
                           ('hold_frames', 1), ('carried_window', 1),
-                          ('audio_hold_frames', 1)):
+                          ('audio_hold_frames', 1), ('rough_window', 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f'FeatureConfig.{name} must be an int >= {low}, got {value!r}')
@@ -469,6 +492,8 @@ class FeatureConfig:
             del data['hold_frames']
         if self.audio_hold_frames == DEFAULT_AUDIO_HOLD_FRAMES:
             del data['audio_hold_frames']
+        if self.rough_window == DEFAULT_ROUGH_WINDOW:
+            del data['rough_window']
         for name, default in DEFAULT_CARRIED.items():
             if data[name] == default:
                 del data[name]

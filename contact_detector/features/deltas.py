@@ -25,6 +25,11 @@ against the carried load, :func:`relative_to_carried`) and ``ft_*_angle = atan2(
 from contact_detector.features.buffers import column_windows
 import numpy as np
 
+#: Smallest earlier roughness ``force_roughness_rel`` divides by, N: a sensor quieter than this
+#: (a simulated or quantised one at rest) is treated as this rough, so a smooth change on it
+#: does not look like a rubbing one.
+ROUGH_FLOOR_N = 0.05
+
 
 def with_angle(names: tuple, change: np.ndarray) -> dict:
     """Name the |F| and |T| columns of ``change`` (m, 2) and their :func:`delta_angle`."""
@@ -115,6 +120,40 @@ def vector_shift(*, change: np.ndarray) -> np.ndarray:
     """
     return np.stack([np.linalg.norm(change[:, :3], axis=1),
                      np.linalg.norm(change[:, 3:], axis=1)], axis=1)
+
+
+def roughness(*, signal: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
+    """
+    How rough the force vector is over the newest samples: the RMS of its second difference.
+
+    ``force_roughness = sqrt((1 / w) sum_k |F_k - 2 F_(k-1) + F_(k-2)|^2)`` over the ``w``
+    samples ``k`` ending at each of ``ends`` (the second difference needs two more before
+    them). A constant or a linearly changing force gives 0; white noise of standard deviation
+    ``s`` per axis about ``sqrt(18) s``; a force that fluctuates (something rubbing and
+    slipping, or ringing) more. The second difference does not change when the sensor frame
+    rotates or carries a constant bias. ``force_roughness_rel`` divides it by the same value
+    ``shift_lag`` samples earlier (floored at :data:`ROUGH_FLOOR_N`): how much rougher the
+    force has become, whatever the sensor's noise and gain.
+
+    Parameters
+    ----------
+    signal : np.ndarray, shape (n, c), c >= 3
+        Force x, y, z in N in the first three columns, one row per F/T sample.
+    ends : np.ndarray, shape (m,)
+        Index of the newest sample of each window, ``>= window + 1``.
+    window : int
+        Second differences averaged, ``w``.
+
+    Returns
+    -------
+    np.ndarray, shape (m,)
+        ``force_roughness`` in N; zeros for a silent sensor.
+
+    """
+    steps = ends[:, None] + np.arange(1 - window, 1)                     # (m, w)
+    force = signal[:, :3]
+    second = force[steps] - 2.0 * force[steps - 1] + force[steps - 2]    # (m, w, 3)
+    return np.sqrt(np.add.reduce((second * second).sum(axis=2), axis=1) / window)
 
 
 def relative_to_carried(*, change: np.ndarray, shift: np.ndarray, carried: np.ndarray,

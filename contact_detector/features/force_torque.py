@@ -31,9 +31,11 @@ from contact_detector.features.carried import CarriedLoad, measure_carried_load
 from contact_detector.features.config import (CARRIED_SHIFT_COS_FEATURES,
                                               CARRIED_SHIFT_FEATURES, CHANGE_FEATURES,
                                               DELTA_FEATURES, FeatureConfig, HOLD_FEATURES,
-                                              NEEDS_CARRIED, PAPER_FEATURES, SHIFT_FEATURES)
-from contact_detector.features.deltas import (carried_lever, relative_to_carried, vector_shift,
-                                              window_mean, window_median, with_angle)
+                                              NEEDS_CARRIED, PAPER_FEATURES, ROUGH_FEATURES,
+                                              SHIFT_FEATURES)
+from contact_detector.features.deltas import (carried_lever, relative_to_carried, ROUGH_FLOOR_N,
+                                              roughness, vector_shift, window_mean, window_median,
+                                              with_angle)
 from contact_detector.features.frames import TimeJumpError
 from contact_detector.features.resample import WrenchResampler
 import numpy as np
@@ -87,9 +89,15 @@ class ForceTorqueStream:
         # the *_hold features hold both the changes and the shifts; the carried-load features
         # compare the vector change with the load measured over the first carried_window
         # samples, which every frame after a start must have
-        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(NEEDS_CARRIED)
+        vector = set(SHIFT_FEATURES) | set(HOLD_FEATURES) | set(NEEDS_CARRIED) \
+            | set(ROUGH_FEATURES)
         if set(self.use_delta) & vector:
             need = max(need, config.shift_lag + max(config.delta_window, config.shift_window))
+        # force_roughness: rough_window second differences of three samples each, now and
+        # shift_lag samples earlier
+        self._want_rough = bool(set(self.use_delta) & set(ROUGH_FEATURES))
+        if self._want_rough:
+            need = max(need, config.shift_lag + config.rough_window + 2)
         #: Whether the features use the carried load (then it is measured, else never).
         self.uses_carried = config.measures_carried
         if self.uses_carried:
@@ -439,6 +447,12 @@ class ForceTorqueStream:
                                 derived['torque_carried_shift_min'] = low_c.T
                 low, high = self._shift_extremes(shift)
                 derived['force_shift'], derived['torque_shift'] = shift.T
+                if self._want_rough:
+                    rough = roughness(signal=vecs, ends=ends, window=cfg.rough_window)
+                    before = roughness(signal=vecs, ends=ends - cfg.shift_lag,
+                                       window=cfg.rough_window)
+                    derived['force_roughness'] = rough
+                    derived['force_roughness_rel'] = rough / np.maximum(before, ROUGH_FLOOR_N)
                 derived['force_shift_min'], derived['torque_shift_min'] = low.T
                 derived['force_shift_max'], derived['torque_shift_max'] = high.T
             if self._want_hold:

@@ -618,6 +618,7 @@ configs = st.builds(
         ('force_carried_shift', 'torque_carried_shift_min'),
         ('torque_carried_shift', 'force_carried_shift_min', 'force_shift_rel'),
         ('force_carried_shift_cos', 'torque_shift'), ('torque_carried_shift_cos',),
+        ('force_roughness',), ('force_roughness_rel', 'force_carried_shift'),
         EXTRA_FEATURES]),
     rise_frames=st.sampled_from([1, 2, 3, 12]),
     peak_frames=st.sampled_from([1, 4, 10]),
@@ -628,6 +629,7 @@ configs = st.builds(
     hold_frames=st.sampled_from([1, 2, 4, 7]),
     carried_window=st.sampled_from([1, 7, 50]),
     audio_hold_frames=st.sampled_from([1, 2, 4, 8, 13]),
+    rough_window=st.sampled_from([1, 5, 20, 33]),
 )
 
 
