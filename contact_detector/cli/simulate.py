@@ -28,8 +28,9 @@ from typing import Sequence
 
 from contact_detector.errors import ContactDetectorError
 from contact_detector.sim.bag_writer import STORAGES, write_trials
-from contact_detector.sim.conditions import (ALIASES, CONDITION_SETS, CONTACT_SOUND_MODES,
-                                             EVENT_MODES, resolve_conditions, TARED_MODES)
+from contact_detector.sim.conditions import (ALIASES, BRUSH_MODES, CONDITION_SETS,
+                                             CONTACT_SOUND_MODES, EVENT_MODES,
+                                             resolve_conditions, TARED_MODES)
 from contact_detector.sim.trial import HIT_KINDS, simulate_trial, simulate_trials
 from tqdm import tqdm
 
@@ -85,6 +86,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="the contact sound's level: family (default): as each set draws "
                              'it (quieter only in quiet_contact and real_sounds); everywhere: '
                              'every other set changes it by -24 to 0 dB')
+    parser.add_argument('--brushes', choices=BRUSH_MODES, default='lifting',
+                        help='how a brush pushes on the object: lifting (default): mostly up, '
+                             'against the motion; friction: the friction against the motion '
+                             'plus the sideways push that makes it (friction coefficient '
+                             '0.2-1.0)')
     parser.add_argument('--hits', choices=HIT_KINDS, default=None,
                         help='give every trial this kind of exogenous event instead of the '
                              "set's cycle (mixed: any of hand, table, touch, brush, setdown "
@@ -126,7 +132,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                        chunk_size=args.chunk_size, label_window_s=args.label_window,
                        events=args.events, tared=args.tared, hits=args.hits,
-                       contact_sound=args.contact_sound)
+                       contact_sound=args.contact_sound, brushes=args.brushes)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -136,7 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window, events=args.events,
                                  tared=args.tared, hits=args.hits,
-                                 contact_sound=args.contact_sound)
+                                 contact_sound=args.contact_sound, brushes=args.brushes)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
@@ -145,6 +151,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.contact_sound != 'family':
             # older manifests have no such key: 'family' is their mode
             settings['contact_sound'] = args.contact_sound
+        if args.brushes != 'lifting':
+            settings['brushes'] = args.brushes
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -375,6 +375,14 @@ TARED_RANGE: Spec = _F_GEOMETRY['tared']
 #: 'quiet_contact' and 'real_sounds' change it); ``'everywhere'``, every set whose family does
 #: not draw ``contact_sound_db`` draws it from :data:`CONTACT_SOUND_RANGE`.
 CONTACT_SOUND_MODES = ('family', 'everywhere')
+#: How a brush pushes on the object: ``'lifting'``, mostly against the motion (up, with a
+#: sideways part of standard deviation 0.7 per horizontal axis: most need a friction coefficient
+#: above 1); ``'friction'``, the friction against the motion is ``mu`` times the sideways push
+#: that makes it, with ``mu`` drawn per brush from :data:`BRUSH_FRICTION_RANGE`.
+BRUSH_MODES = ('lifting', 'friction')
+#: The friction coefficient of a brush with ``brushes='friction'`` (log-uniform; dry contacts
+#: of plastic, wood, metal and rubber).
+BRUSH_FRICTION_RANGE: Spec = Range(0.2, 1.0, log=True)
 #: The ``contact_sound_db`` draw of a set whose family does not draw it, with
 #: ``contact_sound='everywhere'``: the contact sound's peak changed by -24 to 0 dB. The two
 #: independent generators' contacts raise ``audio_rise_db`` by a median of 2.1 and 4.4 dB

@@ -20,10 +20,10 @@ other parameters); :mod:`.loads` and :mod:`.sounds` turn each :class:`Hit` into 
 and sound.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 
-from contact_detector.sim.conditions import EVENT_KINDS
+from contact_detector.sim.conditions import BRUSH_FRICTION_RANGE, EVENT_KINDS
 from contact_detector.sim.params import FamilyParams, TrialParams
 from contact_detector.sim.signals import unit
 from contact_detector.sim.timeline import BASELINE_WINDOW_S, Timeline
@@ -154,3 +154,38 @@ def plan_hits(*, kind: str, count: int, rng: np.random.Generator, p: TrialParams
                             vib_hz=float(rng.uniform(20.0, 60.0)), window=w))
     hits.sort(key=lambda h: h.time(nominal))
     return hits
+
+
+def friction_brush(hit: Hit, *, R: np.ndarray) -> Hit:
+    """
+    Return a brush as friction: the push that makes it, and the friction against the motion.
+
+    The arm brushing something while it moves down feels the friction ``f`` against the motion
+    (up, the brush's planned ``force_n``) and the sideways push ``N = f / mu`` without which
+    there is no friction, along the horizontal part ``n`` of the planned direction:
+
+    ``F = f (z + n / mu)``, so ``|F| = f sqrt(1 + mu^2) / mu``
+
+    (world frame, ``z`` up). ``mu`` is drawn from :data:`BRUSH_FRICTION_RANGE` in a stream of
+    the brush's own (``default_rng([hit.seed, 11])``), so every other draw of the trial stays.
+
+    Parameters
+    ----------
+    hit : Hit
+        A planned brush (``kind == 'brush'``); its ``direction`` is in the sensor frame.
+    R : numpy.ndarray, shape (3, 3)
+        Rotation world -> sensor that oriented ``hit.direction``.
+
+    Returns
+    -------
+    Hit
+        The brush with its ``direction`` and ``force_n`` (N) replaced.
+
+    """
+    world = R.T @ np.asarray(hit.direction, dtype=float)
+    side = np.array([world[0], world[1], 0.0])
+    n = unit(side) if float(np.linalg.norm(side)) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    mu = float(BRUSH_FRICTION_RANGE.sample(np.random.default_rng([hit.seed, 11])))
+    vec = np.array([0.0, 0.0, 1.0]) + n / mu
+    return replace(hit, direction=tuple(R @ unit(vec)),
+                   force_n=hit.force_n * float(np.linalg.norm(vec)))

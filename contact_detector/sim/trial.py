@@ -59,12 +59,12 @@ from typing import Iterator, Sequence
 
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
-from contact_detector.sim.conditions import (CONTACT_SOUND_MODES, CONTACT_SOUND_RANGE,
-                                             DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
+from contact_detector.sim.conditions import (BRUSH_MODES, CONTACT_SOUND_MODES,
+                                             CONTACT_SOUND_RANGE, DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
                                              get_condition, resolve_conditions, TARED_MODES,
                                              TARED_RANGE)
 from contact_detector.sim.geometry import draw_geometry
-from contact_detector.sim.hits import Hit, plan_hits
+from contact_detector.sim.hits import friction_brush, Hit, plan_hits
 from contact_detector.sim.loads import (contact_law, draw_sensor_errors, first_crossing, G,
                                         nominal_stop, Setup, STOP_TORQUE_NM, tare_window,
                                         torque_baseline, weight_transfer_s, wrench)
@@ -183,7 +183,7 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
 
 
 def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
-                events, tared, contact_sound) -> None:
+                events, tared, contact_sound, brushes) -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
@@ -207,13 +207,15 @@ def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s,
     if contact_sound not in CONTACT_SOUND_MODES:
         raise ConfigError(f'contact_sound must be one of {CONTACT_SOUND_MODES}, '
                           f'got {contact_sound!r}')
+    if brushes not in BRUSH_MODES:
+        raise ConfigError(f'brushes must be one of {BRUSH_MODES}, got {brushes!r}')
 
 
 def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rate: int = 16000,
                    ft_rate: float = 100.0, chunk_size: int | None = None,
                    label_window_s: float = 0.1, hits: str | None = None,
                    events: str = 'family', tared: str = 'family',
-                   contact_sound: str = 'family') -> Trial:
+                   contact_sound: str = 'family', brushes: str = 'lifting') -> Trial:
     """
     Synthesise one trial.
 
@@ -258,6 +260,12 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         ``CONTACT_SOUND_RANGE`` (-24 to 0 dB on the contact sound's peak) in a stream of its
         own (``default_rng([seed, index, 10])``); the rest of the trial is the one 'family'
         gives, and ``params['family']`` is recorded.
+    brushes : str
+        'lifting' (default) or 'friction' (``BRUSH_MODES`` of :mod:`.conditions`): with
+        'friction', every brush is the friction against the motion plus the sideways push that
+        makes it, with a friction coefficient of 0.2-1.0
+        (:func:`~contact_detector.sim.hits.friction_brush`); the rest of the trial is the one
+        'lifting' gives.
 
     Returns
     -------
@@ -271,7 +279,7 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     """
     _check_args(seed=seed, index=index, audio_rate=audio_rate, ft_rate=ft_rate,
                 chunk_size=chunk_size, label_window_s=label_window_s, hits=hits,
-                events=events, tared=tared, contact_sound=contact_sound)
+                events=events, tared=tared, contact_sound=contact_sound, brushes=brushes)
     cond = get_condition(condition)
     seed, index, audio_rate, ft_rate = int(seed), int(index), int(audio_rate), float(ft_rate)
     rng = np.random.default_rng([seed, index])
@@ -310,6 +318,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
                          rng=np.random.default_rng([seed, index, 1]), p=p, tl=tl,
                          stop_est=nominal_stop(q=q, geo=geo, contact=contact, tl=tl),
                          R=geo.R, q=q, r_obj=geo.r_obj)
+    if brushes == 'friction':
+        hit_plan = [friction_brush(h, R=geo.R) if h.kind == 'brush' else h for h in hit_plan]
     horizon = q.push_horizon_s
 
     # ---- sensor errors for the longest possible trial (so both passes share them)

@@ -29,6 +29,7 @@ from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              ORIGINAL_SETS, ranges_markdown, REAL_SOUND_SETS,
                                              resolve_conditions, TARED_MODES)
+from contact_detector.sim.hits import friction_brush, Hit
 from contact_detector.sim.loads import G, STOP_TORQUE_NM
 from contact_detector.sim.trial import PHASES, simulate_trial, simulate_trials
 import numpy as np
@@ -723,20 +724,60 @@ def test_tared_everywhere_draws_both_and_an_untared_draw_is_the_family_trial():
     assert sum(kinds == {False, True} for kinds in others.values()) >= 5  # not one set's quirk
 
 
-@pytest.mark.parametrize('flag, mode', [('tared', 'all'), ('contact-sound', 'everywhere')])
+@pytest.mark.parametrize('flag, mode', [('tared', 'all'), ('contact-sound', 'everywhere'),
+                                        ('brushes', 'friction')])
 def test_cli_mode_is_in_the_manifest(tmp_path, flag, mode):
     out = tmp_path / 'set'
     assert simulate_main([str(out), '--trials', '2', '--seed', '4', '--conditions', 'paper',
                           f'--{flag}', mode, '--quiet']) == 0
     manifest = read_manifest(out)
     assert manifest['settings'][flag.replace('-', '_')] == mode
-    family = [t['params']['family'] for t in manifest['trials']]
+    family = [t['params'].get('family', {}) for t in manifest['trials']]
     if flag == 'tared':
         assert [f['tared'] for f in family] == [True, True]
         force = read_wrench(out / 'trial_0000').force
         assert np.linalg.norm(force[20:60].mean(axis=0)) < 0.05  # tared at rest
-    else:
+    elif flag == 'contact-sound':
         assert all(-24.0 <= f['contact_sound_db'] <= 0.0 for f in family)
+
+
+def test_a_friction_brush_pushes_sideways_and_rubs_against_the_motion():
+    rng = np.random.default_rng(3)
+    ratios = []
+    for seed in range(200):
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))  # any sensor orientation
+        world = np.array([rng.normal() * 0.7, rng.normal() * 0.7, 1.0])
+        planned = Hit(kind='brush', anchor='abs', t=1.0, sound_amp=0.01, force_n=2.0,
+                      direction=tuple(q @ (world / np.linalg.norm(world))), seed=seed)
+        brush = friction_brush(planned, R=q)
+        force = brush.force_n * (q.T @ np.asarray(brush.direction))  # N, world frame
+        # the planned force is the friction along the motion (up: the arm moves down) ...
+        assert force[2] == pytest.approx(2.0)
+        side = force[:2]
+        # ... made by a push along the planned sideways direction, with mu in 0.2-1.0
+        assert np.dot(side, world[:2]) == pytest.approx(np.linalg.norm(side)
+                                                        * np.linalg.norm(world[:2]))
+        ratios.append(force[2] / np.linalg.norm(side))
+        assert brush.t == planned.t and brush.seed == planned.seed
+    assert 0.2 <= min(ratios) < 0.3 and 0.8 < max(ratios) <= 1.0
+    assert friction_brush(planned, R=q) == brush  # a stream of the brush's own
+
+
+def test_friction_brushes_change_only_the_brushes():
+    changed = 0
+    for index in range(3):
+        a = simulate_trial(seed=SEED, index=index, condition='exogenous', hits='brush')
+        b = simulate_trial(seed=SEED, index=index, condition='exogenous', hits='brush',
+                           brushes='friction')
+        assert a.onset_t == b.onset_t and a.impacts == b.impacts
+        assert np.array_equal(a.audio, b.audio)  # the same scraping sound
+        first = min(i.t for i in a.impacts if i.kind == 'brush')
+        j = int((first - a.start_time) * a.ft_rate)
+        assert np.array_equal(a.force[:j], b.force[:j])  # nothing changes before the brush
+        changed += not np.allclose(a.force[j:j + 20], b.force[j:j + 20])
+    assert changed == 3
+    with pytest.raises(ConfigError, match='brushes'):
+        simulate_trial(seed=SEED, index=0, brushes='sticky')
 
 
 def test_contact_sound_everywhere_only_quietens_the_contact():
