@@ -25,7 +25,9 @@ topics, the audio format and the F/T rate are found in each bag
 
 Writes one JSON object per line: for every audio frame
 ``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
-``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's name, T the absolute
+``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's (or file's) name,
+with as much of its path as tells apart bags of the same name from different folders
+(``day1/trial_0000``, as ``evaluate`` names them), T the absolute
 bag time in seconds of the last audio sample the decision used (of the last F/T sample with an
 F/T-only model). Each bag starts a fresh detector, armed. A recording without the audio topic
 is decided by the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the
@@ -44,7 +46,7 @@ from typing import Optional, Sequence
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.detection.factory import build_detector_factory, detect_bag, stream_spec
 from contact_detector.errors import ContactDetectorError
-from contact_detector.io.bags import find_bags
+from contact_detector.io.bags import find_bags, recording_names
 from contact_detector.io.node_params import read_node_params
 from tqdm import tqdm
 
@@ -78,6 +80,7 @@ def _detect(args: argparse.Namespace) -> int:
                          prog='contact-detector detect',
                          allow_no_audio=make.decides_without_audio)
     bags = [bag for bag, _ in found]
+    names = recording_names(bags)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     frames = releases = 0
     used = set()
@@ -90,7 +93,7 @@ def _detect(args: argparse.Namespace) -> int:
                       f'{make.describe(has_audio=streams.has_audio)}')
             run = detect_bag(bag=bag, make_detector=make, spec=stream_spec(streams, stream),
                              streams=streams)
-            name = bag.name
+            name = names[bag]
             rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
                                    'contact': bool(c)})
                     for t, p, c in zip(run.t, run.p, run.contact)]

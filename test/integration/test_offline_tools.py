@@ -226,6 +226,18 @@ def test_mcap_bag_gives_identical_output(data, all_rows, tmp_path):
     assert rows == [r for r in all_rows if r['bag'] == trial.name]
 
 
+def test_detect_tells_apart_bags_of_the_same_name_from_two_folders(data, all_rows, tmp_path):
+    trial = data['trials']['trial_0001']
+    other = write_trial_bag(trial=trial, path=tmp_path / 'day2' / trial.name)
+    rows = detect(tmp_path, data['bags'] / trial.name, other, args=['--model', data['model']])
+    mine = f'{data["bags"].name}/{trial.name}'
+    assert list(dict.fromkeys(r['bag'] for r in rows)) == [mine, f'day2/{trial.name}']
+    # the same recording in both folders: the same lines under each name
+    alone = [r for r in all_rows if r['bag'] == trial.name]
+    for name in (mine, f'day2/{trial.name}'):
+        assert [{**r, 'bag': trial.name} for r in rows if r['bag'] == name] == alone
+
+
 def test_44k_audio_with_audio_rate(data, all_rows, tmp_path):
     name = 'trial_0000'
     ref = data['trials'][name]
