@@ -60,9 +60,9 @@ from typing import Iterator, Sequence
 from contact_detector.errors import ConfigError
 from contact_detector.sim import sound_bank
 from contact_detector.sim.conditions import (BRUSH_MODES, CONTACT_SOUND_MODES,
-                                             CONTACT_SOUND_RANGE, DEFAULT_HIT_CYCLE, EVENT_MODES, EVENT_RANGES,
-                                             get_condition, resolve_conditions, TARED_MODES,
-                                             TARED_RANGE)
+                                             CONTACT_SOUND_RANGE, DEFAULT_HIT_CYCLE,
+                                             EVENT_MODES, EVENT_RANGES, get_condition,
+                                             resolve_conditions, TARED_MODES, TARED_RANGE)
 from contact_detector.sim.geometry import draw_geometry
 from contact_detector.sim.hits import friction_brush, Hit, plan_hits
 from contact_detector.sim.loads import (contact_law, draw_sensor_errors, first_crossing, G,
