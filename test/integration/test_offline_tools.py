@@ -739,6 +739,11 @@ def test_sweep_lofo_scores_each_family_plain_and_augmented(data, tmp_path):
             assert sorted(r[2] for r in rows(family_part)
                           if r[0] == setting and r[1] == rule) == sorted(families)
     assert all(r[2] in families for r in rows(worst_part))
+    # a stricter slow path only releases later: never early more often, over all families
+    early = {r[1]: int(r[7].split(' / ')[1]) for r in rows(worst_part) if r[0] == 'shipped'}
+    shipped = 'p>=0.95 x1 or mean15>=0.4'
+    assert early['p>=0.95 x1 or mean15>=0.5'] <= early['p>=0.95 x1 or mean15>=0.45'] \
+        <= early[shipped]
 
 
 def test_sweep_lofo_scores_the_knocked_trials_and_a_shorter_maximum_window(data, tmp_path):
