@@ -99,9 +99,10 @@ LOFO_SETTINGS = {
     # its recent minimum: the whole transfer since the arming, however slowly it came (a
     # guard's |F - F_rest|; issue #14)
     'cshift': tuple(DEFAULT_FEATURES.feature_names) + CARRIED_SHIFT_FEATURES,
-    # the shipped columns and how rough the force is, alone and per newton of its shift: the
-    # arm brushing something changes the load by a force that fluctuates as it slips, a table
-    # takes it off smoothly (docs/decisions/2026-11-28-force-roughness.md)
+    # the shipped columns and how rough the force is, alone and against how rough it was
+    # shift_lag samples earlier: the arm brushing something changes the load by a force that
+    # fluctuates as it slips, a table takes it off smoothly
+    # (docs/decisions/2026-11-28-force-roughness.md)
     'rough': tuple(DEFAULT_FEATURES.feature_names) + ROUGH_FEATURES,
     'ft-only+signed+carried+cshift': (_SPECTRAL + _SHIFT + _SIGNED + CARRIED_FEATURES
                                       + CARRIED_SHIFT_FEATURES),
