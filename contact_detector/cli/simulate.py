@@ -46,11 +46,12 @@ def build_parser() -> argparse.ArgumentParser:
                     'as rosbag2 plus a JSON manifest.',
         epilog=f'Condition sets: {sets}. Aliases: all: the six original sets (paper to '
                f'odd_chunking); families: the six families (geometry to quiet_contact); wide: '
-               f'those twelve. real_sounds (recorded sounds) needs tools/fetch_sounds.sh '
-               f'first. Trial i uses condition i mod len(conditions); within a set the '
-               f'exogenous hits cycle hand, table, none (exogenous: mixed, touch, brush, '
-               f'setdown); with --events everywhere the other sets add mixed (any of hand, '
-               f'table, touch, brush, setdown per event).')
+               f'those twelve; no alias includes real_sounds or slow_partial. real_sounds '
+               f'(recorded sounds) needs tools/fetch_sounds.sh first. Trial i uses condition '
+               f'i mod len(conditions); within a set the exogenous hits cycle hand, table, '
+               f'none (exogenous: mixed, touch, brush, setdown); with --events everywhere '
+               f'the other sets add mixed (any of hand, table, touch, brush, setdown per '
+               f'event).')
     parser.add_argument('out_dir', metavar='OUT_DIR', type=Path,
                         help='directory for the bags and manifest.json (created)')
     parser.add_argument('--trials', type=int, default=6, metavar='N',

@@ -27,8 +27,8 @@ from contact_detector.io.bags import (iter_messages, jazzy_typestore, read_audio
 from contact_detector.sim import sound_bank
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
-                                             ORIGINAL_SETS, ranges_markdown, REAL_SOUND_SETS,
-                                             resolve_conditions, TARED_MODES)
+                                             LATER_SETS, ORIGINAL_SETS, ranges_markdown,
+                                             REAL_SOUND_SETS, resolve_conditions, TARED_MODES)
 from contact_detector.sim.hits import friction_brush, Hit
 from contact_detector.sim.loads import G, STOP_TORQUE_NM
 from contact_detector.sim.trial import PHASES, simulate_trial, simulate_trials
@@ -466,7 +466,7 @@ def test_aliases_keep_all_as_the_original_six():
     assert resolve_conditions(['all']) == ORIGINAL_SETS
     assert resolve_conditions(['families']) == FAMILY_SETS
     assert resolve_conditions(['wide']) == ORIGINAL_SETS + FAMILY_SETS
-    assert set(CONDITION_SETS) == set(ORIGINAL_SETS + FAMILY_SETS + REAL_SOUND_SETS)
+    assert set(CONDITION_SETS) == set(ORIGINAL_SETS + FAMILY_SETS + REAL_SOUND_SETS + LATER_SETS)
     # the original sets draw no family parameters: their trials are those of before
     paper = simulate_trial(seed=SEED, index=0, condition='paper')
     assert 'family' not in paper.params and 'stop_rule' not in paper.params['derived']
@@ -548,6 +548,28 @@ def test_spring_load_passes_through_the_weight_or_stops_partway():
                 crossed_zero += base < 0 < _window_mean(tr, f_up, tr.stop_t + 0.1,
                                                         tr.stop_t + 0.25)
     assert partial >= 1 and beyond >= 1 and crossed_zero >= 1
+
+
+@pytest.mark.slow
+def test_slow_partial_moves_part_of_the_weight_slowly():
+    partial, tared = 0, set()
+    for index in range(6):
+        tr = simulate_trial(seed=SEED, index=index, condition='slow_partial', hits='none')
+        d, fam = tr.params['derived'], tr.params['family']
+        assert fam['contact_model'] == 'compliant' and d['stop_rule'] == 'load'
+        assert 0.1 <= d['weight_transfer_s'] <= 1.1
+        n = _load_along_up(tr)
+        weight = d['object_total_kg'] * G
+        assert weight <= 0.4 * G
+        # slow: under a third of the weight on the table 60 ms after the onset
+        assert _window_mean(tr, n, tr.onset_t + 0.04, tr.onset_t + 0.06) < weight / 3
+        # the arm stops with part of the weight (or about all of it) on the table, never
+        # pressing on as 'compliant' does
+        settled = _window_mean(tr, n, tr.stop_t + 0.3, tr.stop_t + 0.4)
+        assert 0.3 * weight <= settled <= 1.3 * weight
+        partial += settled < 0.85 * weight
+        tared.add(fam['tared'])
+    assert partial >= 1 and tared == {False, True}
 
 
 @pytest.mark.slow
