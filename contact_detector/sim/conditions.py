@@ -357,7 +357,7 @@ _F_SLOW_PARTIAL = {
     **_FAMILY_STOP,
 }
 _SLOW_PARTIAL = {
-    'object_mass_kg': Range(0.05, 0.3),     # light: the contact moves 0.1-4 N
+    'object_mass_kg': Range(0.05, 0.3),     # light: the contact moves 0.5-4 N
     'liquid_mass_kg': Range(0.0, 0.1),
     'descent_speed_mps': Range(0.005, 0.04, log=True),
     'impact_transmission': Range(0.0, 0.1),
