@@ -81,8 +81,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--tared', choices=TARED_MODES, default='family',
                         help='F/T sensors tared (zeroed at rest before the lift, so they read '
                              'the change of the load since then): family (default): only the '
-                             'geometry set draws it (tared or not, equal odds); everywhere: '
-                             'every set draws it; all: every sensor is tared')
+                             'geometry and slow_partial sets draw it (tared or not, equal '
+                             'odds); everywhere: every set draws it; all: every sensor is '
+                             'tared; none: no sensor is (the same trials otherwise)')
     parser.add_argument('--contact-sound', choices=CONTACT_SOUND_MODES, default='family',
                         help="the contact sound's level: family (default): as each set draws "
                              'it (quieter only in quiet_contact and real_sounds); everywhere: '

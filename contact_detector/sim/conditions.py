@@ -390,9 +390,11 @@ EVENT_RANGES: dict[str, Spec] = {
     name: spec for name, spec in _F_EXOGENOUS.items() if name.split('_')[0] in
     ('touch', 'brush', 'setdown')}
 #: Which trials' F/T sensors are tared (zeroed at rest before the lift): ``'family'``, only
-#: where the family draws it ('geometry': tared or not, equal odds); ``'everywhere'``, every set
-#: whose family does not draw it draws it from :data:`TARED_RANGE`; ``'all'``, every sensor.
-TARED_MODES = ('family', 'everywhere', 'all')
+#: where the family draws it ('geometry' and 'slow_partial': tared or not, equal odds);
+#: ``'everywhere'``, every set whose family does not draw it draws it from
+#: :data:`TARED_RANGE`; ``'all'``, every sensor; ``'none'``, no sensor (so the same contacts
+#: can be compared tared and untared).
+TARED_MODES = ('family', 'everywhere', 'all', 'none')
 #: The ``tared`` draw of a set whose family does not draw it, with ``tared='everywhere'`` (the
 #: 'geometry' range; its own random stream, so the trial is otherwise unchanged).
 TARED_RANGE: Spec = _F_GEOMETRY['tared']

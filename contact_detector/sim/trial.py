@@ -247,13 +247,15 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         (``default_rng([seed, index, 8])``), and ``hits=None`` draws from the set's
         ``ConditionSet.cycle``. The rest of the trial is the one ``events='family'`` gives.
     tared : str
-        'family' (default), 'everywhere' or 'all' (``TARED_MODES`` of :mod:`.conditions`):
-        whether the F/T sensor is tared (zeroed at rest before the lift, so it reads the load's
-        change since then). 'family': only 'geometry' draws it; 'everywhere': a set whose
-        family does not draw it draws it (untared or tared, equal odds) in a stream of its own
-        (``default_rng([seed, index, 9])``); 'all': every sensor is tared. An untared trial's
-        wrench and audio are the ones ``tared='family'`` gives. With 'everywhere' and 'all'
-        every trial's ``params['family']`` is recorded, its ``tared`` the draw.
+        'family' (default), 'everywhere', 'all' or 'none' (``TARED_MODES`` of
+        :mod:`.conditions`): whether the F/T sensor is tared (zeroed at rest before the lift,
+        so it reads the load's change since then). 'family': only the sets whose family draws
+        it ('geometry', 'slow_partial'); 'everywhere': a set whose family does not draw it
+        draws it (untared or tared, equal odds) in a stream of its own
+        (``default_rng([seed, index, 9])``); 'all': every sensor is tared; 'none': no sensor
+        is. An untared trial's wrench and audio are the ones ``tared='family'`` gives, and
+        the tare changes nothing else. With 'everywhere', 'all' and 'none' every trial's
+        ``params['family']`` is recorded, its ``tared`` the draw.
     contact_sound : str
         'family' (default) or 'everywhere' (``CONTACT_SOUND_MODES`` of :mod:`.conditions`):
         with 'everywhere', a set whose family does not draw ``contact_sound_db`` draws it from
@@ -296,8 +298,8 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         q = replace(q, **{name: EVENT_RANGES[name].sample(ev_rng) for name in missing})
         cycle = cond.cycle(events=events)
         drawn_kind = cycle[int(ev_rng.integers(0, len(cycle)))] if hits is None else drawn_kind
-    if tared == 'all':
-        q = replace(q, tared=True)
+    if tared in ('all', 'none'):
+        q = replace(q, tared=tared == 'all')
     elif tared == 'everywhere' and 'tared' not in cond.family:
         # a stream of its own, so every other parameter stays what 'family' draws
         q = replace(q, tared=bool(TARED_RANGE.sample(np.random.default_rng([seed, index, 9]))))

@@ -700,7 +700,7 @@ def test_tared_all_zeroes_every_sensor_at_rest_and_changes_nothing_else():
     family = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], hits='none'))
     tared = list(simulate_trials(n=n, seed=SEED, conditions=['wide'], hits='none',
                                  tared='all'))
-    assert TARED_MODES == ('family', 'everywhere', 'all')
+    assert TARED_MODES == ('family', 'everywhere', 'all', 'none')
     for a, b in zip(family, tared):
         assert b.params['family']['tared'] is True, b.condition
         if a.condition == 'geometry':
@@ -719,6 +719,37 @@ def test_tared_all_zeroes_every_sensor_at_rest_and_changes_nothing_else():
         q = a.params['force_quant_n']
         assert np.ptp(b.force[:j] - a.force[:j], axis=0).max() <= q + 1e-9
         assert a.onset_t == b.onset_t and a.phases[:5] == b.phases[:5]
+
+
+def test_tared_none_unzeroes_the_sensors_a_family_tares_and_changes_nothing_else(tmp_path):
+    # slow_partial and geometry draw tared or not: 'none' gives the untared twin of each trial
+    n = 8
+    family = list(simulate_trials(n=n, seed=SEED, conditions=['slow_partial', 'geometry'],
+                                  hits='none'))
+    untared = list(simulate_trials(n=n, seed=SEED, conditions=['slow_partial', 'geometry'],
+                                   hits='none', tared='none'))
+    assert {a.params['family']['tared'] for a in family} == {False, True}
+    for a, b in zip(family, untared):
+        assert b.params['family']['tared'] is False, b.condition
+        assert {k: v for k, v in a.params['family'].items() if k != 'tared'} == \
+            {k: v for k, v in b.params['family'].items() if k != 'tared'}
+        fb, _ = _rest_wrench(b)
+        # the untared sensor reads the held load at rest (hand and object: several newtons)
+        assert np.linalg.norm(fb, axis=1).mean() > 2.0, b.condition
+        if a.params['family']['tared']:
+            # the same wrench up to the tare (a constant) and one quantisation step
+            j = int(np.searchsorted(a.wrench_t, a.onset_t))
+            q = a.params['force_quant_n']
+            assert np.ptp(b.force[:j] - a.force[:j], axis=0).max() <= q + 1e-9
+            assert a.onset_t == b.onset_t and np.array_equal(a.audio, b.audio)
+        else:
+            assert np.array_equal(a.force, b.force) and np.array_equal(a.audio, b.audio)
+    # the command line takes it and records it
+    assert simulate_main([str(tmp_path / 'x'), '--trials', '1', '--conditions', 'slow_partial',
+                          '--tared', 'none', '--quiet']) == 0
+    manifest = read_manifest(tmp_path / 'x')
+    assert manifest['settings']['tared'] == 'none'
+    assert manifest['trials'][0]['params']['family']['tared'] is False
 
 
 @pytest.mark.slow
