@@ -251,6 +251,10 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser, *,
                              f'sensor offset of up to +-{m.offset_force_n:g} N and '
                              f'+-{m.offset_torque_nm:g} N m per axis (default '
                              f'{default(lambda a: f"{a.offset_probability:g}")})')
+    parser.add_argument('--augment-offset-size', type=scale_range, default=None, metavar='N,NM',
+                        help='augmentation: the largest sensor offset per axis, force (N) and '
+                             'torque (N m), of --augment-offset (default '
+                             f'{default(lambda a: _pair(_offset_size(a)))})')
     parser.add_argument('--augment-gain', type=scale_range, default=None, metavar='LOW,HIGH',
                         help='augmentation: the whole wrench times a gain drawn log-uniformly '
                              f'from LOW,HIGH (default {default(lambda a: _pair(a.gain))})')
@@ -263,6 +267,10 @@ def add_augmentation_arguments(parser: argparse.ArgumentParser, *,
                              'time constant (s) is drawn log-uniformly from LOW,HIGH: a softer '
                              'wrist or surface (default '
                              f'{default(lambda a: _pair(a.lag_s) if any(a.lag_s) else "none")})')
+
+
+def _offset_size(augmentation: WrenchAugmentation) -> Tuple[float, float]:
+    return augmentation.offset_force_n, augmentation.offset_torque_nm
 
 
 def _pair(value: Tuple[float, float]) -> str:
@@ -278,10 +286,13 @@ def augmentation_from_args(args: argparse.Namespace, *,
     model's with ``--no-audio``, else the multimodal model's (:func:`recipe_defaults`).
     """
     d = defaults if defaults is not None else _defaults(args).augmentation
+    offset_force_n, offset_torque_nm = _given(args.augment_offset_size, default=_offset_size(d))
     return WrenchAugmentation(
         tare_probability=_given(args.augment_tare, default=d.tare_probability),
         torque_scale=tuple(_given(args.augment_torque, default=d.torque_scale)),
         offset_probability=_given(args.augment_offset, default=d.offset_probability),
+        offset_force_n=offset_force_n,
+        offset_torque_nm=offset_torque_nm,
         contact_offset_m=_given(args.augment_contact_offset, default=d.contact_offset_m),
         gain=tuple(_given(args.augment_gain, default=d.gain)),
         lag_s=tuple(_given(args.augment_lag, default=d.lag_s)))
