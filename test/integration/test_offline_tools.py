@@ -816,6 +816,14 @@ def test_train_augment_is_recorded_in_the_card_and_bad_ranges_are_refused(data, 
     assert train_cli.main([bags, '--augment', '--augment-lag', '0,0.2',
                            '--out', str(tmp_path / 'bad.npz')]) != 0
     assert 'lag_s' in capsys.readouterr().err
+    # the offset's size is recorded, and a negative one is refused
+    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '2', '--augment',
+                           '--augment-offset-size', '20,1', '--out', str(model)]) == 0
+    recorded = load_bundle(path=model).training['augmentation']
+    assert (recorded['offset_force_n'], recorded['offset_torque_nm']) == (20.0, 1.0)
+    assert train_cli.main([bags, '--augment', '--augment-offset-size=-1,1',
+                           '--out', str(tmp_path / 'bad.npz')]) != 0
+    assert 'offset sizes' in capsys.readouterr().err
 
 
 def test_sweep_keeps_its_augmentation_defaults_while_train_takes_the_shipped_ones(capsys):
