@@ -79,12 +79,13 @@ def trial_digest(trial) -> str:
     return sha.hexdigest()
 
 
-def reference_trials(*, real: bool):
-    """Yield ``(name, trial)`` of the reference trials (with 'real_sounds' if ``real``)."""
-    for trial in simulate_trials(n=12, seed=SEED, conditions=['wide']):
-        yield f'{trial.condition}_{trial.index}', trial
-    yield 'paper_1khz_44k', simulate_trial(seed=SEED, index=12, condition='paper',
-                                           ft_rate=1000.0, audio_rate=44100)
+def reference_trials(*, simulated: bool = True, real: bool):
+    """Yield ``(name, trial)`` of the reference trials: the synthetic ones, 'real_sounds'."""
+    if simulated:
+        for trial in simulate_trials(n=12, seed=SEED, conditions=['wide']):
+            yield f'{trial.condition}_{trial.index}', trial
+        yield 'paper_1khz_44k', simulate_trial(seed=SEED, index=12, condition='paper',
+                                               ft_rate=1000.0, audio_rate=44100)
     if real:
         yield 'real_sounds_13', simulate_trial(seed=SEED, index=13, condition='real_sounds')
 
@@ -100,9 +101,10 @@ def pinned_environment() -> dict:
     return env
 
 
-def pinned_digests(*, real: bool) -> dict:
+def pinned_digests(*, simulated: bool = True, real: bool) -> dict:
     """Return name -> digest of the reference trials, simulated with the arithmetic pinned."""
-    argv = [sys.executable, __file__, '--child'] + (['--real'] if real else [])
+    argv = ([sys.executable, __file__, '--child'] + (['--simulated'] if simulated else [])
+            + (['--real'] if real else []))
     done = subprocess.run(argv, env=pinned_environment(), capture_output=True, text=True,
                           timeout=600, check=False)
     assert done.returncode == 0, done.stderr
@@ -133,13 +135,14 @@ def test_real_sounds_trial_is_bit_identical_to_the_reference():
         pytest.skip(why)
     if sound_bank.load_bank().fingerprint != RECORDED_BANK:
         pytest.skip('another sound bank than the one the digest was recorded with')
-    assert pinned_digests(real=True)['real_sounds_13'] == EXPECTED['real_sounds_13']
+    got = pinned_digests(simulated=False, real=True)
+    assert got == {'real_sounds_13': EXPECTED['real_sounds_13']}
 
 
 if __name__ == '__main__':
     if '--child' in sys.argv:     # the pinned child of pinned_digests
-        print(json.dumps({key: trial_digest(trial)
-                          for key, trial in reference_trials(real='--real' in sys.argv)}))
+        trials = reference_trials(simulated='--simulated' in sys.argv, real='--real' in sys.argv)
+        print(json.dumps({key: trial_digest(trial) for key, trial in trials}))
         sys.exit(0)
     bank = sound_bank.load_bank().fingerprint if sound_bank.bank_available() else None
     print(f'RECORDED_BANK = {bank!r}')
