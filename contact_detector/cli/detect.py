@@ -45,9 +45,9 @@ from typing import Optional, Sequence
 
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.detection.factory import build_detector_factory, detect_bag, stream_spec
+from contact_detector.detection.parameters import read_param_file
 from contact_detector.errors import ContactDetectorError
 from contact_detector.io.bags import find_bags, recording_names
-from contact_detector.io.node_params import read_node_params
 from tqdm import tqdm
 
 
@@ -75,7 +75,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 def _detect(args: argparse.Namespace) -> int:
     make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                           audio_rate=args.audio_rate)
-    params = read_node_params(args.params) if args.params else {}
+    params = read_param_file(args.params) if args.params else {}
     found = discover_all(find_bags(args.bags), args=args, params=params,
                          prog='contact-detector detect',
                          allow_no_audio=make.decides_without_audio)
@@ -107,6 +107,9 @@ def _detect(args: argparse.Namespace) -> int:
             if run.carried is not None and not run.carried.steady:
                 print(f'{name}: {run.carried.describe()}: the recording should start with '
                       'the object held still in the hand', file=sys.stderr)
+            problem = run.input_problem()
+            if problem:
+                print(f'{name}: {problem}', file=sys.stderr)
             if run.counts.get('audio_dropped') or run.counts.get('wrench_dropped'):
                 print(f'{name}: dropped {run.counts["audio_dropped"]} audio and '
                       f'{run.counts["wrench_dropped"]} wrench messages', file=sys.stderr)

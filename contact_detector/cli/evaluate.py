@@ -44,12 +44,12 @@ from typing import List, Optional, Sequence
 
 from contact_detector.cli.common import add_stream_arguments, discover_all
 from contact_detector.detection.factory import build_detector_factory
+from contact_detector.detection.parameters import read_param_file
 from contact_detector.errors import ContactDetectorError
 from contact_detector.evaluation.baselines import BASELINES
 from contact_detector.evaluation.compare import evaluate
 from contact_detector.evaluation.report import comparison_table, recording_table, write_report
 from contact_detector.io.bags import find_bags
-from contact_detector.io.node_params import read_node_params
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.training.protocol import labels_for
 from tqdm import tqdm
@@ -86,7 +86,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                               audio_rate=args.audio_rate)
         probe = make()
-        params = read_node_params(args.params) if args.params else {}
+        params = read_param_file(args.params) if args.params else {}
         make_ft = None
         if 'forest-ft' in detectors:
             make_ft, _ = build_detector_factory(model=args.ft_model, params_file=args.params,

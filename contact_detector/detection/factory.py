@@ -28,10 +28,10 @@ from typing import Optional
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import Run, run_detector
+from contact_detector.detection.parameters import read_param_file
 from contact_detector.detection.release import rule_overrides
 from contact_detector.io.discovery import Streams
 from contact_detector.io.messages import normalise_msg_type
-from contact_detector.io.node_params import read_node_params
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
@@ -160,7 +160,7 @@ def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path]
     ``make_detector(streams=None)`` builds a fresh detector; given a bag's :class:`Streams`,
     with that bag's audio and F/T rates.
     """
-    params = read_node_params(params_file) if params_file else {}
+    params = read_param_file(params_file) if params_file else {}
     settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
     path = model or (Path(model_param) if model_param else None)
     make = DetectorFactory(model=path, audio_enabled=bool(params.get('audio.enabled', True)),

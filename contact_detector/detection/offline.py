@@ -61,6 +61,40 @@ class Run:
     counts: dict = field(default_factory=dict)
     carried: Optional[CarriedLoad] = None
 
+    def input_problem(self) -> Optional[str]:
+        """
+        Say what kept frames from being decided, if anything did beyond the warm-up.
+
+        A frame without valid input (no F/T near its time, stale, non-finite) is decided
+        ``p = 0``, which looks like a confident "no contact" in the output; when most frames
+        are such frames, a miss says nothing about the detector.
+
+        Returns
+        -------
+        str or None
+            One line for the tools to print; None when at least half of the frames were
+            decided and no frame was stale, non-finite or after a time jump.
+
+        """
+        c = self.counts
+        frames, invalid = c.get('frames', 0), c.get('invalid_frames', 0)
+        msgs = c.get('audio_msgs', 0) + c.get('wrench_msgs', 0)
+        found = [f'{c[k]} {what}' for k, what in (
+            ('stale_frames', 'stale'), ('nonfinite_frames', 'non-finite'),
+            ('time_jumps', 'time jumps')) if c.get(k)]
+        if frames == 0:
+            return f'no frame from {msgs} messages' if msgs else None
+        if invalid * 2 <= frames and not found:
+            return None
+        text = f'{invalid} of {frames} frames could not be decided (p 0)'
+        if found:
+            text += ': ' + ', '.join(found)
+        if invalid * 2 > frames:
+            text += ('; most frames found no F/T sample near their time: are the wrench '
+                     'stamps and the audio times on one clock? A miss here says nothing '
+                     'about the detector')
+        return text
+
 
 def run_detector(events: Iterable[Event], *, detector: ContactDetector,
                  in_blocks: bool = True) -> Run:

@@ -103,6 +103,9 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
                          else 'every recording')
                 log(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}')
             run = run_detector(events, detector=detector)
+            problem = run.input_problem() if key is not None else None
+            if problem:
+                log(f'{names[bag]}: {name}: {problem}')
             if truth is None:
                 outcomes[name].extend(score_onsets(name=names[bag],
                                                    condition=bag.parent.name if several

@@ -18,19 +18,23 @@ Bag -> sensor events, in the order and with the times the live node would see th
 Every offline tool (``train``, ``detect``, ``evaluate``, the sweep, the demo's checks) reads
 recordings through :func:`sensor_events`, which applies the node's own message adapters
 (:mod:`contact_detector.io.messages`): audio is stamped with its header where the type has one
-and with the bag's log (receive) time otherwise, wrench samples with their header stamps. So
-the features computed offline are those the node computes live: no train/serve skew.
+and with the bag's log (receive) time otherwise, wrench samples with their header stamps. An
+audio header stamp that repeats or precedes the one before is dropped and counted, as the node
+drops it. So the features computed offline are those the node computes live: no train/serve
+skew.
 """
 
 import dataclasses
 from dataclasses import dataclass
+import math
 from pathlib import Path
 from typing import Iterator, List, Optional, Union
 
 from contact_detector.errors import BagError, InputError
 from contact_detector.io import cdr
 from contact_detector.io.bags import AudioSeries, iter_messages
-from contact_detector.io.messages import audio_stamp, audio_to_samples, wrench_to_arrays
+from contact_detector.io.messages import (audio_stamp, audio_to_samples, check_stamp,
+                                          wrench_to_arrays)
 import numpy as np
 
 
@@ -137,6 +141,7 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
         yield from _mp3_events(Path(path), spec=spec)
         return
     topics = [t for t in (spec.wrench_topic, spec.audio_topic, spec.truth_topic) if t]
+    previous: Optional[float] = None       # the last accepted audio header stamp
     for message in iter_messages(Path(path), topics=topics, decoders=FAST_DECODERS):
         now = message.log_time_ns * 1e-9
         if message.topic == spec.audio_topic and spec.audio_msg_type \
@@ -152,6 +157,15 @@ def sensor_events(path: Path, *, spec: StreamSpec = StreamSpec()) -> Iterator[Ev
                 samples = audio_to_samples(message.msg, msg_type=msg_type,
                                            channels=spec.channels, channel=spec.channel)
                 stamp = audio_stamp(message.msg, msg_type)
+                if stamp is not None:
+                    # the node's checks of header stamps (audio.stamp_source header): a
+                    # repeated or reordered stamp is dropped and counted, not decided at a
+                    # time that goes backwards; a driver that never fills the stamp (all 0)
+                    # shows up here. The recorder's clock is not the sensor's, so no
+                    # max_future_s.
+                    check_stamp(stamp=stamp, now=now, max_future_s=math.inf,
+                                previous=previous, what='audio header stamp')
+                    previous = stamp
                 yield AudioEvent(samples=samples, stamp=now if stamp is None else stamp,
                                  now=now)
             else:
