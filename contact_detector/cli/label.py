@@ -23,6 +23,12 @@ that cannot be labelled gets empty onsets, confidence 0 and the reason; readers 
 warning. ``--plots DIR`` writes a review figure per bag (|F|, |T|, the vector shift, the audio
 power and the proposed onset). Like the other commands it prints what discovery found: topics,
 audio format and F/T rate, with their sources and warnings.
+
+The F/T samples are read as ``detect`` reads them (:func:`contact_detector.io.bags.read_wrench`):
+messages with an invalid stamp, NaN/Inf values, or a stamp that repeats or goes back are left
+out and counted, and the counts are printed. A bag whose F/T rate ``detect`` refuses (outside
+[50, 10000] Hz) or whose ``--wrench-topic`` is not a WrenchStamped is unreadable: its row has
+no onset and says why.
 """
 
 import argparse
@@ -31,11 +37,15 @@ from pathlib import Path
 import sys
 from typing import Optional, Sequence
 
-from contact_detector.errors import ContactDetectorError
+from contact_detector.errors import BagError, ConfigError, ContactDetectorError
 from contact_detector.evaluation.labelling import Proposal, propose_onset
+from contact_detector.features.resample import (INTEGER_TOLERANCE, MAX_INPUT_RATE,
+                                                MIN_INPUT_RATE)
 from contact_detector.io.bags import (find_bags, manifest_entry, read_wrench,
                                       recording_names, topic_types)
-from contact_detector.io.discovery import discover_streams, Streams, summary_lines
+from contact_detector.io.discovery import (discover_streams, find_wrench_topic,
+                                           measure_wrench_rate, PROBE_MESSAGES, Streams,
+                                           summary_lines)
 from contact_detector.io.sensor_stream import read_audio_series, StreamSpec
 import numpy as np
 from tqdm import tqdm
@@ -64,14 +74,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _wrench_only_topic(bag: Path, given: Optional[str]) -> str:
-    if given:
-        return given
-    found = [t for t, ty in topic_types(bag).items() if ty.endswith('WrenchStamped')]
-    if len(found) != 1:
-        raise ContactDetectorError(f'{bag}: {len(found)} WrenchStamped topics {found}; '
-                                   'give --wrench-topic')
-    return found[0]
+def check_wrench_rate(*, rate: float, topic: str, source: str) -> None:
+    """
+    Refuse an F/T rate that ``detect`` refuses: outside [50, 10000] Hz (1 % slack).
+
+    Parameters
+    ----------
+    rate : float
+        F/T rate, Hz.
+    topic : str
+        The wrench topic, for the message.
+    source : str
+        Where the rate comes from, for the message.
+
+    Raises
+    ------
+    BagError
+        The rate is outside the range (the bag is then unreadable, as for ``detect``).
+
+    """
+    # the bounds and slack of detect's resampler, so label refuses exactly what detect refuses
+    slack = 1.0 + INTEGER_TOLERANCE
+    if not MIN_INPUT_RATE / slack <= rate <= MAX_INPUT_RATE * slack:
+        raise BagError(f'wrench rate {rate:.4g} Hz of {topic} ({source}) is outside '
+                       f'[{MIN_INPUT_RATE:g}, {MAX_INPUT_RATE:g}] Hz')
 
 
 def label_bag(bag: Path, *,
@@ -79,19 +105,35 @@ def label_bag(bag: Path, *,
     """
     Read one bag and propose its onset.
 
-    Returns the proposal, the arrays for a figure and what discovery found (None when it
-    failed and the F/T topic was found by its type alone).
+    Returns the proposal, the arrays for a figure (and ``wrench``, the
+    :class:`~contact_detector.io.bags.WrenchSeries` with its drop counts) and what discovery
+    found (None when it failed and the bag is labelled from the F/T alone).
+
+    Raises
+    ------
+    BagError
+        The wrench topic is missing, ambiguous or of another type, has no usable message, or
+        its F/T rate is one ``detect`` refuses.
+    ConfigError
+        A flag's value is refused (``--audio-rate``).
+
     """
     entry = manifest_entry(bag) or {}
     audio = rate = audio_t0 = streams = None
+    # a wrong wrench topic is no reason to fall back to the F/T alone: it is the F/T
+    wrench_topic = find_wrench_topic(bag, types=topic_types(bag), given=args.wrench_topic)
+    # first: a bag without usable F/T is unreadable whatever its audio
+    wrench = read_wrench(bag, topic=wrench_topic)
     try:
         streams = discover_streams(bag, wrench_topic=args.wrench_topic,
                                    audio_topic=args.audio_topic, audio_rate=args.audio_rate,
                                    param_audio_rate=entry.get('audio_rate'),
                                    allow_no_audio=True)
-        wrench_topic = streams.wrench_topic    # its warnings are printed with the summary
         if not streams.has_audio and not args.no_audio:
-            print(f'{PROG}: warning: {bag.name}: F/T only (no audio topic)', file=sys.stderr)
+            # its other warnings are printed with the summary
+            note = f'; {streams.audio_note}' if streams.audio_note else ''
+            print(f'{PROG}: warning: {bag.name}: F/T only (no audio topic{note})',
+                  file=sys.stderr)
         if streams.has_audio and not args.no_audio:
             series = read_audio_series(bag, spec=StreamSpec(
                 wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,
@@ -99,18 +141,29 @@ def label_bag(bag: Path, *,
                 coding=streams.coding, audio_rate=streams.audio_rate))
             rate = float(streams.audio_rate)
             audio, audio_t0 = series.samples, series.t0(rate)
+    except ConfigError:
+        raise       # a flag's value: the same for every bag, not an audio problem of this one
     except ContactDetectorError as err:
         print(f'{PROG}: warning: {bag.name}: F/T only ({err})', file=sys.stderr)
-        wrench_topic = _wrench_only_topic(bag, args.wrench_topic)
-    wrench = read_wrench(bag, topic=wrench_topic)
-    order = np.argsort(wrench.t, kind='stable')
-    t = wrench.t[order]
-    keep = np.concatenate([[True], np.diff(t) > 0])
-    t, force, torque = t[keep], wrench.force[order][keep], wrench.torque[order][keep]
+    if streams is not None:
+        w_rate, source = streams.wrench_rate, 'measured from the header stamps'
+    else:
+        # discovery failed before measuring it: measure as it does, on the samples kept
+        try:
+            w_rate = measure_wrench_rate(stamps=wrench.t[:PROBE_MESSAGES], path=bag,
+                                         topic=wrench_topic)
+        except BagError as err:     # its advice (--wrench-rate) is no flag of label
+            raise BagError(f'cannot measure the F/T rate of {wrench_topic}: fewer than two '
+                           f'usable samples ({wrench.describe_drops() or "one message"})'
+                           ) from err
+        source = 'measured from the header stamps kept'
+    check_wrench_rate(rate=w_rate, topic=wrench_topic, source=source)
+    t, force, torque = wrench.t, wrench.force, wrench.torque
     proposal = propose_onset(ft_t=t, force=force, torque=torque, audio=audio,
                              audio_rate=rate, audio_t0=audio_t0)
     return proposal, {'t': t, 'force': force, 'torque': torque, 'audio': audio, 'rate': rate,
-                      'audio_t0': audio_t0, 'truth': entry.get('onset_t')}, streams
+                      'audio_t0': audio_t0, 'truth': entry.get('onset_t'),
+                      'wrench': wrench}, streams
 
 
 def plot_proposal(*, bag: Path, proposal: Proposal, data: dict, output: Path) -> Path:
@@ -190,11 +243,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             proposal, data, streams = label_bag(bag, args=args)
             if streams is not None:
                 found.append((bag, streams))
+        except ConfigError as err:
+            print(f'{PROG}: error: {err}', file=sys.stderr)
+            return 1
         except ContactDetectorError as err:
             print(f'{PROG}: {names[bag]}: {err}', file=sys.stderr)
             rows.append([names[bag], '', '', '0.0', f'unreadable: {err}'.replace(',', ';')])
             continue
         rows.append(row_for(names[bag], proposal, length=args.label_length))
+        drops = data['wrench'].describe_drops()
+        if drops:
+            print(f'{PROG}: warning: {names[bag]}: {drops}', file=sys.stderr)
         print(f'{PROG}: {names[bag]}: ' + (
             f'onset {proposal.onset_t:.4f} ({proposal.source}) confidence '
             f'{proposal.confidence:.2f}' if proposal.onset_t is not None

@@ -43,11 +43,13 @@ from collections import Counter
 from contextlib import contextmanager, ExitStack
 import json
 import logging
+import math
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, NamedTuple, Sequence
 
-from contact_detector.errors import BagError
+from contact_detector.errors import BagError, InputError
 from contact_detector.io import ros1, salvage
+from contact_detector.io.messages import wrench_sample
 import numpy as np
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Reader as Ros1Reader
@@ -556,29 +558,112 @@ def read_truth(path: Path, *, topic: str = TRUTH_TOPIC) -> list[tuple[float, boo
 
 
 class WrenchSeries(NamedTuple):
-    """Wrench samples of one topic: header stamps (s), force (n, 3) N, torque (n, 3) N m."""
+    """
+    Wrench samples of one topic, in increasing stamp order, and the messages left out.
+
+    Attributes
+    ----------
+    t : np.ndarray, shape (n,)
+        Header stamps, s, strictly increasing.
+    force : np.ndarray, shape (n, 3)
+        Force, N.
+    torque : np.ndarray, shape (n, 3)
+        Torque, N m.
+    frame_id : str
+        ``header.frame_id`` of the last message read.
+    bad_messages : int
+        Messages the adapter refused (:func:`~contact_detector.io.messages.wrench_sample`:
+        an invalid stamp such as ``nanosec >= 1e9``, missing or non-numeric fields).
+    non_finite : int
+        Messages with a NaN or infinite value.
+    out_of_order : int
+        Messages whose stamp repeats or precedes the last one kept.
+    first_problem : str
+        Why the first refused message was refused ('' if none was).
+
+    """
 
     t: np.ndarray
     force: np.ndarray
     torque: np.ndarray
     frame_id: str
+    bad_messages: int = 0
+    non_finite: int = 0
+    out_of_order: int = 0
+    first_problem: str = ''
+
+    @property
+    def dropped(self) -> int:
+        """Messages left out, for every reason."""
+        return self.bad_messages + self.non_finite + self.out_of_order
+
+    def describe_drops(self) -> str:
+        """
+        Say how many messages were left out and why ('' if none).
+
+        E.g. ``dropped 12 of 1100 F/T messages: 12 with NaN/Inf values``.
+        """
+        if not self.dropped:
+            return ''
+        parts = [f'{n} {what}' for n, what in (
+            (self.bad_messages, f'refused (first: {self.first_problem})'),
+            (self.non_finite, 'with NaN/Inf values'),
+            (self.out_of_order, 'with a stamp that repeats or precedes the previous one'))
+            if n]
+        return (f'dropped {self.dropped} of {self.dropped + self.t.size} F/T messages: '
+                + ', '.join(parts))
 
 
 def read_wrench(path: Path, *, topic: str = WRENCH_TOPIC) -> WrenchSeries:
-    """Read a geometry_msgs/WrenchStamped topic into arrays (stamps from the headers)."""
-    t, f, q = [], [], []
+    """
+    Read a ``geometry_msgs/WrenchStamped`` topic into arrays (stamps from the headers).
+
+    Each message goes through the node's adapter
+    (:func:`~contact_detector.io.messages.wrench_sample`), and the messages the detector would
+    not use are left out and counted (:class:`WrenchSeries`; the caller reports them): refused
+    ones (an invalid stamp, missing fields), NaN/Inf values, and stamps that repeat or go back
+    (kept: strictly increasing stamps, in the order the bag holds them).
+
+    Raises
+    ------
+    BagError
+        The topic holds another type than WrenchStamped, or has no message that can be used.
+
+    """
+    t, values = [], []
+    bad = non_finite = out_of_order = 0
+    first_problem = ''
     frame = ''
+    last = -math.inf
     for m in iter_messages(path, topics=[topic]):
-        st = m.msg.header.stamp
-        t.append(st.sec + st.nanosec * 1e-9)
-        w = m.msg.wrench
-        f.append((w.force.x, w.force.y, w.force.z))
-        q.append((w.torque.x, w.torque.y, w.torque.z))
-        frame = m.msg.header.frame_id
+        if m.msgtype != WRENCH_TYPE:
+            raise BagError(f'{path}: {topic} holds {m.msgtype}, not {WRENCH_TYPE}')
+        try:
+            stamp, six = wrench_sample(m.msg)
+        except InputError as err:
+            bad += 1
+            first_problem = first_problem or str(err)
+            continue
+        if not all(math.isfinite(v) for v in six):
+            non_finite += 1
+            continue
+        if not stamp > last:
+            # a sorted copy would hide a reordering the detector sees (and refuses) live
+            out_of_order += 1
+            continue
+        last = stamp
+        t.append(stamp)
+        values.append(six)
+        frame = str(getattr(getattr(m.msg, 'header', None), 'frame_id', frame))
+    series = WrenchSeries(np.asarray(t, dtype=float),
+                          np.asarray(values, dtype=float).reshape(-1, 6)[:, :3],
+                          np.asarray(values, dtype=float).reshape(-1, 6)[:, 3:], frame,
+                          bad_messages=bad, non_finite=non_finite, out_of_order=out_of_order,
+                          first_problem=first_problem)
     if not t:
-        raise BagError(f'{path}: no messages on {topic}')
-    return WrenchSeries(np.asarray(t), np.asarray(f, dtype=float).reshape(-1, 3),
-                        np.asarray(q, dtype=float).reshape(-1, 3), frame)
+        raise BagError(f'{path}: no usable messages on {topic} ({series.describe_drops()})'
+                       if series.dropped else f'{path}: no messages on {topic}')
+    return series
 
 
 class AudioSeries(NamedTuple):

@@ -15,7 +15,8 @@
 """
 Find a bag's sensor topics, audio format and F/T rate, so offline commands need no flags.
 
-* Wrench topic: the one topic of type ``geometry_msgs/msg/WrenchStamped``.
+* Wrench topic: the one topic of type ``geometry_msgs/msg/WrenchStamped`` (a topic named by
+  the command's flag must be of that type too, :func:`find_wrench_topic`).
 * Audio topic: the one topic of a supported audio type (:data:`AUDIO_MSG_TYPES`).
 * Audio format, first found of: the command's flag; the bag's own description, an
   ``audio_common_msgs/msg/AudioInfo`` topic (ros-drivers: rate, channels, coding ``wave`` or
@@ -24,7 +25,8 @@ Find a bag's sensor topics, audio format and F/T rate, so offline commands need 
   node's parameter file; else an estimate: samples per second of recording (bag log) time,
   snapped to the nearest standard rate (:data:`STANDARD_AUDIO_RATES`), with a warning.
 * No audio topic: an error, unless the caller can decide without audio (``allow_no_audio``,
-  an F/T-only model): the bag's :class:`Streams` then has ``audio_topic`` None.
+  an F/T-only model): the bag's :class:`Streams` then has ``audio_topic`` None, and its
+  ``audio_note`` names a topic that looks like audio but has an unsupported type.
 * F/T rate: the command's flag, else the mean period of the regular steps of the header stamps
   (:func:`measure_wrench_rate`).
 
@@ -44,8 +46,8 @@ from contact_detector.errors import BagError, ConfigError, InputError
 from contact_detector.io.bags import iter_messages, topic_types
 from contact_detector.io.cdr import FAST_DECODERS
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_to_samples, check_audio_info,
-                                          embedded_audio_format, normalise_msg_type,
-                                          wrench_sample)
+                                          embedded_audio_format, MAX_SAMPLE_RATE,
+                                          MIN_SAMPLE_RATE, normalise_msg_type, wrench_sample)
 from contact_detector.io.mp3 import mp3_format
 import numpy as np
 
@@ -91,6 +93,9 @@ class Streams:
         ``flag`` or ``stamps`` (measured).
     warnings : tuple of str
         What the user should know (an estimated rate).
+    audio_note : str
+        Without an audio topic: why a topic that looks like audio was not read (its type is
+        not supported); '' if there is none.
 
     """
 
@@ -104,6 +109,7 @@ class Streams:
     wrench_rate: float
     wrench_rate_source: str
     warnings: tuple = ()
+    audio_note: str = ''
 
     @property
     def has_audio(self) -> bool:
@@ -113,8 +119,9 @@ class Streams:
     def describe(self) -> str:
         """One line: topics, audio format and F/T rate, with their sources."""
         if not self.has_audio:
+            note = f' ({self.audio_note})' if self.audio_note else ''
             return (f'wrench {self.wrench_topic} at {self.wrench_rate:.4g} Hz '
-                    f'({self.wrench_rate_source}); no audio topic')
+                    f'({self.wrench_rate_source}); no audio topic{note}')
         coding = ', mp3' if self.coding == 'mp3' else ''
         return (f'wrench {self.wrench_topic} at {self.wrench_rate:.4g} Hz '
                 f'({self.wrench_rate_source}); audio {self.audio_topic} '
@@ -141,6 +148,75 @@ def _pick(path: Path, types: dict, wanted, what: str, flag: str, given: Optional
                        + ', '.join(f'{t} [{m}]' for t, m in sorted(types.items())))
     raise BagError(f'{path}: several {what} topics: '
                    + ', '.join(f'{t} [{types[t]}]' for t in found) + f'; choose one with {flag}')
+
+
+def find_wrench_topic(path: Path, *, types: dict, given: Optional[str] = None) -> str:
+    """
+    Return the wrench topic of a bag: ``given`` (``--wrench-topic``), else found by its type.
+
+    Parameters
+    ----------
+    path : Path
+        The bag, for the messages.
+    types : dict
+        Topic name -> message type of the bag (:func:`~contact_detector.io.bags.topic_types`).
+    given : str or None
+        The topic the user named; None = the one topic of type :data:`WRENCH_TYPE`.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    BagError
+        ``given`` is missing from the bag or is of another type than :data:`WRENCH_TYPE`
+        (the message names the type found), or no or several topics have that type.
+
+    """
+    topic = _pick(path, types, lambda m: m == WRENCH_TYPE, 'geometry_msgs/WrenchStamped',
+                  '--wrench-topic', given)
+    if types[topic] != WRENCH_TYPE:
+        # Every reader downstream takes the messages for wrenches: refuse here, by name.
+        raise BagError(f'{path}: {topic} (--wrench-topic) holds {types[topic]}, not '
+                       f'{WRENCH_TYPE}')
+    return topic
+
+
+def unsupported_audio_note(types: dict) -> str:
+    """
+    Say which topics look like audio but have a type that cannot be read ('' if none).
+
+    A topic looks like audio when ``audio`` is part of its name or type (``AudioInfo``, the
+    format topic, aside), e.g. ``/audio`` recorded as ``std_msgs/msg/String``.
+    """
+    odd = sorted((t, m) for t, m in types.items()
+                 if m not in AUDIO_MSG_TYPES and m != AUDIO_INFO_TYPE
+                 and 'audio' in f'{t} {m}'.lower())
+    if not odd:
+        return ''
+    listed = ', '.join(f'{t} holds {m}' for t, m in odd)
+    return f'{listed}: not a supported audio type'
+
+
+def _flag_rates(audio_rate: Optional[float],
+                wrench_rate: Optional[float]) -> tuple[Optional[float], Optional[float]]:
+    """Check the rates given by flags; 0 is refused like any value out of range."""
+    if audio_rate is not None:
+        value = float(audio_rate)
+        if not MIN_SAMPLE_RATE <= value <= MAX_SAMPLE_RATE:     # also False for NaN
+            raise ConfigError(f'--audio-rate: audio sample rate must be in '
+                              f'[{MIN_SAMPLE_RATE:.0f}, {MAX_SAMPLE_RATE:.0f}] Hz, got '
+                              f'{value:g}')
+        audio_rate = value
+    if wrench_rate is not None:
+        value = float(wrench_rate)
+        # the accepted range is the resampler's (features layer): only what no rate can be here
+        if not (math.isfinite(value) and value > 0):
+            raise ConfigError(f'--wrench-rate: F/T rate must be a positive number of Hz, '
+                              f'got {value:g}')
+        wrench_rate = value
+    return audio_rate, wrench_rate
 
 
 def _info_topic(types: dict, audio_topic: str) -> Optional[str]:
@@ -284,24 +360,28 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
     Raises
     ------
     BagError
-        A topic is missing (the audio topic: unless ``allow_no_audio``) or ambiguous, or a
-        rate can be neither read nor measured.
+        A topic is missing (the audio topic: unless ``allow_no_audio``), ambiguous or of the
+        wrong type, or a rate can be neither read nor measured.
+    ConfigError
+        ``audio_rate`` outside [MIN_SAMPLE_RATE, MAX_SAMPLE_RATE] Hz, or ``wrench_rate`` not a
+        positive number (0 included: it is a value, not "no flag").
 
     """
     path = Path(path)
+    audio_rate, wrench_rate = _flag_rates(audio_rate, wrench_rate)
     types = topic_types(path)
     wanted_audio = normalise_msg_type(audio_msg_type) if audio_msg_type else None
-    w_topic = _pick(path, types, lambda m: m == WRENCH_TYPE, 'geometry_msgs/WrenchStamped',
-                    '--wrench-topic', wrench_topic)
+    w_topic = find_wrench_topic(path, types=types, given=wrench_topic)
     if allow_no_audio and not audio_topic and not any(m in AUDIO_MSG_TYPES
                                                       for m in types.values()):
-        stamps = [] if wrench_rate else probe(path, wrench_topic=w_topic)[0]
-        w_rate = (float(wrench_rate) if wrench_rate else
+        stamps = [] if wrench_rate is not None else probe(path, wrench_topic=w_topic)[0]
+        w_rate = (wrench_rate if wrench_rate is not None else
                   measure_wrench_rate(stamps=stamps, path=path, topic=w_topic))
         return Streams(wrench_topic=w_topic, audio_topic=None, audio_msg_type='',
                        audio_rate=None, audio_rate_source='', channels=channels or 1,
                        coding='pcm', wrench_rate=w_rate,
-                       wrench_rate_source='flag' if wrench_rate else 'stamps')
+                       wrench_rate_source='flag' if wrench_rate is not None else 'stamps',
+                       audio_note=unsupported_audio_note(types))
     a_topic = _pick(path, types,
                     lambda m: m == wanted_audio if wanted_audio else m in AUDIO_MSG_TYPES,
                     f'audio {wanted_audio} (audio.msg_type)' if wanted_audio else
@@ -343,14 +423,14 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
             rate, n_ch, found_coding, source = sniffed + ('mp3', 'mp3 header')
     n_ch = n_ch or channels or 1
     found_coding = coding or found_coding or 'pcm'
-    if audio_rate:
-        rate, source = float(audio_rate), 'flag'
+    if audio_rate is not None:
+        rate, source = audio_rate, 'flag'
     elif rate is None and param_audio_rate:
         rate, source = float(param_audio_rate), param_source
     estimate = rate is None
     if estimate and found_coding == 'mp3':
         raise BagError(f'{path}: mp3 audio on {a_topic} without AudioInfo; give --audio-rate')
-    stamps, sizes, times = probe(path, wrench_topic=None if wrench_rate else w_topic,
+    stamps, sizes, times = probe(path, wrench_topic=None if wrench_rate is not None else w_topic,
                                  audio_topic=a_topic if estimate else None,
                                  audio_msg_type=a_type, channels=n_ch)
     if estimate:
@@ -358,8 +438,8 @@ def discover_streams(path: Path, *, wrench_topic: Optional[str] = None,
         rate, source = snap_audio_rate(raw), 'estimated'
         warnings.append(f'audio rate of {a_topic} estimated from the recording time: '
                         f'{raw:.0f} samples/s -> {rate:g} Hz')
-    if wrench_rate:
-        w_rate, w_source = float(wrench_rate), 'flag'
+    if wrench_rate is not None:
+        w_rate, w_source = wrench_rate, 'flag'
     else:
         w_rate = measure_wrench_rate(stamps=stamps, path=path, topic=w_topic)
         w_source = 'stamps'

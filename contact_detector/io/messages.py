@@ -47,6 +47,7 @@ import math
 from typing import Any, Optional
 
 from contact_detector.errors import ConfigError, InputError
+from contact_detector.io.cdr import Stamp
 import numpy as np
 
 #: Sample rates the feature core accepts, Hz (see ``AudioFramer``).
@@ -208,12 +209,18 @@ def wrench_sample(msg: Any) -> tuple[float, tuple]:
     Raises
     ------
     InputError
-        Missing or non-numeric fields. (NaN/Inf and stamp order are checked by the core.)
+        Missing or non-numeric fields, or a message of another type (e.g. what the CDR
+        readers give for ``std_msgs/Bool``). (NaN/Inf and stamp order are checked by the core.)
 
     """
-    if isinstance(msg, tuple):          # from cdr.read_wrench_stamped
-        stamp, values = msg
-        return stamp_to_seconds(stamp), values
+    if isinstance(msg, tuple):
+        # The fast readers give NamedTuples for other types too (cdr.Bool, cdr.MultiArray):
+        # only a (Stamp, six values) pair is what cdr.read_wrench_stamped returns.
+        if len(msg) == 2 and isinstance(msg[0], Stamp) and isinstance(msg[1], tuple) \
+                and len(msg[1]) == 6:
+            return stamp_to_seconds(msg[0]), msg[1]
+        raise InputError(f'{type(msg).__name__} is not a geometry_msgs/msg/WrenchStamped '
+                         '(wrong message type?)')
     t = stamp_to_seconds(_field(_field(msg, 'header'), 'stamp'))
     wrench = _field(msg, 'wrench')
     try:

@@ -164,6 +164,58 @@ def test_broken_bags_raise_bag_error(tmp_path):
         read_wrench(tmp_path / 'broken')
 
 
+def _wrench_bag(path: Path, stamps: list, *, nan_at: tuple = ()) -> Path:
+    """Write a bag whose /ft holds one WrenchStamped per ``(sec, nanosec)`` (fz = index)."""
+    store = jazzy_typestore()
+    types = store.types
+    vec = types['geometry_msgs/msg/Vector3']
+    with Writer(path, version=9) as writer:
+        ft = writer.add_connection('/ft', 'geometry_msgs/msg/WrenchStamped', typestore=store)
+        other = writer.add_connection('/vec', 'geometry_msgs/msg/Vector3Stamped',
+                                      typestore=store)
+        for k, (sec, nanosec) in enumerate(stamps):
+            header = types['std_msgs/msg/Header'](
+                stamp=types['builtin_interfaces/msg/Time'](sec=sec, nanosec=nanosec),
+                frame_id='ft')
+            fz = float('nan') if k in nan_at else float(k)
+            msg = types['geometry_msgs/msg/WrenchStamped'](
+                header=header, wrench=types['geometry_msgs/msg/Wrench'](
+                    force=vec(x=0.0, y=0.0, z=fz), torque=vec(x=0.0, y=0.0, z=0.0)))
+            writer.write(ft, 1_000 + k, store.serialize_cdr(
+                msg, 'geometry_msgs/msg/WrenchStamped'))
+            writer.write(other, 1_000 + k, store.serialize_cdr(
+                types['geometry_msgs/msg/Vector3Stamped'](header=header, vector=vec(
+                    x=0.0, y=0.0, z=0.0)), 'geometry_msgs/msg/Vector3Stamped'))
+    return path
+
+
+def test_read_wrench_drops_and_counts_what_the_detector_would_not_use(tmp_path):
+    ms = 1_000_000
+    stamps = [(5, 0), (5, 10 * ms), (5, 1_500_000_000), (5, 20 * ms), (5, 20 * ms),
+              (5, 15 * ms), (5, 30 * ms), (5, 40 * ms), (5, 50 * ms)]
+    bag = _wrench_bag(tmp_path / 'mixed', stamps, nan_at=(7,))
+    w = read_wrench(bag, topic='/ft')
+    # kept: strictly increasing stamps in bag order, finite values, valid stamps
+    np.testing.assert_allclose(w.t, [5.0, 5.01, 5.02, 5.03, 5.05])
+    np.testing.assert_array_equal(w.force[:, 2], [0.0, 1.0, 3.0, 6.0, 8.0])
+    assert (w.bad_messages, w.non_finite, w.out_of_order, w.dropped) == (1, 1, 2, 4)
+    assert 'nanosec=1500000000' in w.first_problem and w.frame_id == 'ft'
+    assert w.describe_drops() == (
+        f'dropped 4 of 9 F/T messages: 1 refused (first: {w.first_problem}), 1 with NaN/Inf '
+        'values, 2 with a stamp that repeats or precedes the previous one')
+    clean = read_wrench(_wrench_bag(tmp_path / 'clean', stamps[:2]), topic='/ft')
+    assert clean.dropped == 0 and clean.describe_drops() == ''
+    # another type under the name: refused by name, not an AttributeError
+    with pytest.raises(BagError, match='/vec holds geometry_msgs/msg/Vector3Stamped, not '
+                                       'geometry_msgs/msg/WrenchStamped'):
+        read_wrench(bag, topic='/vec')
+    # nothing usable: a BagError that says why
+    invalid = _wrench_bag(tmp_path / 'invalid', [(5, 1_500_000_000)] * 3)
+    with pytest.raises(BagError, match=r'no usable messages on /ft \(dropped 3 of 3 F/T '
+                                       r'messages: 3 refused \(first: invalid time stamp'):
+        read_wrench(invalid, topic='/ft')
+
+
 def test_fast_cdr_matches_typestore():
     store = jazzy_typestore()
     types = store.types

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from contact_detector.cli import detect as detect_cli
 from contact_detector.detection import factory
-from contact_detector.errors import BagError
+from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import find_bags, iter_cdr, iter_messages
 from contact_detector.io.discovery import (common_rates, discover_streams, snap_audio_rate,
                                            Streams)
@@ -267,6 +267,71 @@ def test_several_candidate_topics_are_listed_and_a_flag_chooses(tmp_path, capsys
     only = write_bag(tmp_path / 'noaudio', 'sqlite3', store, messages[:100])
     with pytest.raises(BagError, match=r'no audio .* topic; topics: /left/ft'):
         discover_streams(only)
+
+
+def test_a_wrench_topic_of_another_type_is_refused_naming_its_type(tmp_path, capsys):
+    store = store_with('sqlite3', {})
+    types = store.types
+    header = types['std_msgs/msg/Header'](
+        stamp=types['builtin_interfaces/msg/Time'](sec=1, nanosec=0), frame_id='ft')
+    vec = types['geometry_msgs/msg/Vector3'](x=1.0, y=2.0, z=3.0)
+    arr = store.types[I16]
+    layout = store.types['std_msgs/msg/MultiArrayLayout'](dim=[], data_offset=0)
+    messages = wrench_series(store, rate=100.0, seconds=1.0, topic='/ft')
+    messages += [('/audio', I16, 10**18 + k * 10**7,
+                  arr(layout=layout, data=np.zeros(160, np.int16))) for k in range(1, 100)]
+    messages += [('/flag', 'std_msgs/msg/Bool', 10**18 + k, types['std_msgs/msg/Bool'](data=True))
+                 for k in range(5)]
+    messages += [('/vec', 'geometry_msgs/msg/Vector3Stamped', 10**18 + k,
+                  types['geometry_msgs/msg/Vector3Stamped'](header=header, vector=vec))
+                 for k in range(5)]
+    bag = write_bag(tmp_path / 'typed', 'sqlite3', store, messages)
+    for topic, found in (('/flag', 'std_msgs/msg/Bool'), ('/audio', I16),
+                         ('/vec', 'geometry_msgs/msg/Vector3Stamped')):
+        for rate in (None, 100.0):      # with --wrench-rate nothing is probed: still refused
+            with pytest.raises(BagError, match=f'{topic} \\(--wrench-topic\\) holds {found}, '
+                                               f'not {WS}'):
+                discover_streams(bag, wrench_topic=topic, wrench_rate=rate)
+    # detect says so, instead of a traceback from the message adapter
+    assert detect_cli.main([str(bag), '--wrench-topic', '/flag', '--wrench-rate', '100',
+                            '--out', str(tmp_path / 'o.jsonl')]) == 1
+    assert 'holds std_msgs/msg/Bool' in capsys.readouterr().err
+    assert discover_streams(bag, wrench_topic='/ft').wrench_topic == '/ft'
+
+
+def test_a_rate_flag_of_zero_is_refused_not_ignored(tmp_path):
+    store = store_with('sqlite3', ROS_DRIVERS_MSGS)
+    messages = (wrench_series(store, rate=200.0, seconds=1.0)
+                + audio_data_series(store, rate=22050, chunk=441, seconds=1.0)
+                + [audio_info(store, rate=22050, channels=1)])
+    bag = write_bag(tmp_path / 'b', 'sqlite3', store, messages)
+    for bad in (0, 0.0, -16000.0, float('nan')):
+        with pytest.raises(ConfigError, match='--audio-rate: audio sample rate must be in'):
+            discover_streams(bag, audio_rate=bad)
+    for bad in (0, -100.0, float('inf')):
+        with pytest.raises(ConfigError, match='--wrench-rate: F/T rate must be a positive'):
+            discover_streams(bag, wrench_rate=bad)
+        with pytest.raises(ConfigError, match='--wrench-rate'):
+            discover_streams(bag, wrench_rate=bad, allow_no_audio=True)
+    found = discover_streams(bag, audio_rate=16000, wrench_rate=250)
+    assert (found.audio_rate, found.audio_rate_source) == (16000.0, 'flag')
+    assert (found.wrench_rate, found.wrench_rate_source) == (250.0, 'flag')
+
+
+def test_an_audio_topic_of_an_unsupported_type_is_named(tmp_path):
+    store = store_with('sqlite3', {})
+    messages = wrench_series(store, rate=100.0, seconds=1.0)
+    messages += [('/audio', 'std_msgs/msg/String', 10**18 + k * 10**7,
+                  store.types['std_msgs/msg/String'](data='pcm?')) for k in range(1, 10)]
+    bag = write_bag(tmp_path / 'b', 'sqlite3', store, messages)
+    streams = discover_streams(bag, allow_no_audio=True)     # the F/T-only fallback stays
+    assert not streams.has_audio
+    assert streams.audio_note == '/audio holds std_msgs/msg/String: not a supported audio type'
+    assert streams.describe().endswith(
+        'no audio topic (/audio holds std_msgs/msg/String: not a supported audio type)')
+    # a bag with no such topic says only that it has no audio topic
+    plain = write_bag(tmp_path / 'p', 'sqlite3', store, messages[:100])
+    assert discover_streams(plain, allow_no_audio=True).describe().endswith('no audio topic')
 
 
 def test_a_bag_without_audio_is_found_only_for_an_ft_only_model(tmp_path, capsys):

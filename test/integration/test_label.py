@@ -27,12 +27,15 @@ from contact_detector.cli import simulate as simulate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.errors import InputError
 from contact_detector.evaluation.labelling import hinge_fit, NO_CHANGE, propose_onset
+from contact_detector.io.bags import read_wrench
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
 from contact_detector.training.protocol import read_labels_csv
 import numpy as np
 import pytest
+from rosbags.rosbag2 import Reader, Writer
+from rosbags.typesys import get_typestore, Stores
 from scipy.stats import binomtest, norm
 
 pytestmark = pytest.mark.slow   # simulates bags, labels and trains
@@ -113,6 +116,117 @@ def test_label_prints_what_it_found(labelled, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert (f'contact-detector label: {ros1.name}: wrench /wrist_wrench at 100 Hz (stamps); '
             'audio /audio [std_msgs/Int16MultiArray] 16000 Hz') in printed
+
+
+# --- input the detector refuses or drops: label does the same, and says so ---------------------
+
+@pytest.fixture(scope='module')
+def contact_bag(tmp_path_factory):
+    """Simulate a recording with a clear contact; return it and its true onset (s)."""
+    trial = simulate_trial(seed=3, index=0, condition='paper')
+    bag = write_trial_bag(trial=trial, path=tmp_path_factory.mktemp('input') / trial.name)
+    return bag, trial.onset_t
+
+
+def _rewrite(src: Path, dst: Path, change) -> Path:
+    """Copy ``src``, the k-th /wrist_wrench message ``msg`` replaced by ``change(k, msg)``."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(src) as reader, Writer(dst, version=9) as writer:
+        conns = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=store)
+                 for c in reader.connections}
+        k = 0
+        for conn, log_ns, raw in reader.messages():
+            if conn.topic == '/wrist_wrench':
+                msg = change(k, store.deserialize_cdr(raw, conn.msgtype))
+                raw = store.serialize_cdr(msg, conn.msgtype)
+                k += 1
+            writer.write(conns[conn.id], log_ns, raw)
+    return dst
+
+
+def _restamp(msg, *, sec: int, nanosec: int):
+    stamp = dataclasses.replace(msg.header.stamp, sec=sec, nanosec=nanosec)
+    return dataclasses.replace(msg, header=dataclasses.replace(msg.header, stamp=stamp))
+
+
+def _label(bags: list, out: Path, *extra) -> dict:
+    assert label_cli.main([*map(str, bags), '--out', str(out), *extra]) == 0
+    with open(out) as handle:
+        return {r['bag']: r for r in csv.DictReader(handle)}
+
+
+def test_label_refuses_what_detect_refuses_with_no_label(contact_bag, tmp_path, capsys):
+    bag, _ = contact_bag
+    # every stamp with nanosec = 1.5e9 (invalid): once labelled with confidence 1.00
+    bad_ns = _rewrite(bag, tmp_path / 'bad_nanosec', lambda k, m: _restamp(
+        m, sec=1_700_000_000 + k // 100, nanosec=1_500_000_000))
+    # 1 us steps: a 1 MHz F/T stream, outside the rates detect accepts
+    fast = _rewrite(bag, tmp_path / 'us_steps', lambda k, m: _restamp(
+        m, sec=1_700_000_000, nanosec=1000 * k))
+    rows = _label([bad_ns, fast], tmp_path / 'refused.csv')
+    err = capsys.readouterr().err
+    for name, why in (('bad_nanosec', 'no usable messages on /wrist_wrench'),
+                      ('us_steps', 'wrench rate 1e+06 Hz of /wrist_wrench (measured from the '
+                                   'header stamps) is outside [50; 10000] Hz')):
+        row = rows[name]
+        assert (row['onset_start'], row['onset_end'], row['confidence']) == ('', '', '0.0')
+        assert row['reason'].startswith('unreadable: ') and why in row['reason'], row
+        assert why.replace(';', ',') in err
+    assert 'nanosec=1500000000 is outside [0; 1e9)' in rows['bad_nanosec']['reason']
+    assert 'Traceback' not in err
+
+
+def test_label_refuses_a_wrench_topic_of_another_type(contact_bag, tmp_path, capsys):
+    bag, _ = contact_bag
+    rows = _label([bag], tmp_path / 'typed.csv', '--wrench-topic', '/contact_truth')
+    row = rows[bag.name]
+    assert row['onset_start'] == '' and row['reason'].startswith('unreadable: ')
+    assert ('/contact_truth (--wrench-topic) holds std_msgs/msg/Bool; not '
+            'geometry_msgs/msg/WrenchStamped') in row['reason']
+    assert 'F/T only' not in capsys.readouterr().err   # no fallback to the topic it refused
+
+
+def test_label_drops_counts_and_prints_bad_samples(contact_bag, tmp_path, capsys):
+    bag, onset = contact_bag
+    rng = np.random.default_rng(1)
+    nan_at = set(np.flatnonzero(rng.random(10_000) < 0.2).tolist())
+
+    def nan_some(k, msg):
+        if k not in nan_at:
+            return msg
+        force = dataclasses.replace(msg.wrench.force, x=float('nan'))
+        return dataclasses.replace(msg, wrench=dataclasses.replace(msg.wrench, force=force))
+
+    def repeat_every_tenth(k, msg):
+        # message k repeats the stamp of message k - 1: a duplicated sample
+        if k % 10 or not k:
+            return msg
+        ns = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec - 10_000_000
+        return _restamp(msg, sec=ns // 10**9, nanosec=ns % 10**9)
+
+    nans = _rewrite(bag, tmp_path / 'nan_some', nan_some)
+    dups = _rewrite(bag, tmp_path / 'dups', repeat_every_tenth)
+    rows = _label([nans, dups], tmp_path / 'dropped.csv')
+    err = capsys.readouterr().err
+    total = sum(1 for _ in read_wrench(bag).t)
+    n_nan = len([k for k in nan_at if k < total])
+    n_dup = len(range(10, total, 10))
+    assert (f'nan_some: dropped {n_nan} of {total} F/T messages: {n_nan} with NaN/Inf '
+            'values') in err
+    assert (f'dups: dropped {n_dup} of {total} F/T messages: {n_dup} with a stamp that '
+            'repeats or precedes the previous one') in err
+    # once the NaN samples are left out the contact is found (they used to hide it)
+    for name in ('nan_some', 'dups'):
+        assert abs(float(rows[name]['onset_start']) - onset) <= 0.020, rows[name]
+
+
+def test_label_refuses_a_rate_flag_of_zero(contact_bag, tmp_path, capsys):
+    bag, _ = contact_bag
+    out = tmp_path / 'zero.csv'
+    assert label_cli.main([str(bag), '--audio-rate', '0', '--out', str(out)]) == 1
+    assert 'error: --audio-rate: audio sample rate must be in [1000, 384000] Hz, got 0' in (
+        capsys.readouterr().err)
+    assert not out.exists()
 
 
 def test_label_accuracy_pools_sets_and_gives_the_interval(tmp_path):

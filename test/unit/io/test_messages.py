@@ -17,9 +17,11 @@
 from types import SimpleNamespace as NS
 
 from contact_detector.errors import ConfigError, InputError
+from contact_detector.io import cdr
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, audio_stamp, audio_to_samples,
                                           AudioFormat, check_audio_info, embedded_audio_format,
-                                          normalise_msg_type, stamp_to_seconds, wrench_to_arrays)
+                                          normalise_msg_type, stamp_to_seconds, wrench_sample,
+                                          wrench_to_arrays)
 import numpy as np
 import pytest
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
@@ -92,6 +94,22 @@ def test_wrench_to_arrays():
         wrench_to_arrays(NS(header=header(), wrench=bad))
     with pytest.raises(InputError, match='no field'):
         wrench_to_arrays(NS(header=header()))
+
+
+def test_wrench_sample_reads_the_cdr_pair_and_refuses_other_fast_decodings():
+    raw = (cdr.CDR_LE + b'\x00\x00' + (3).to_bytes(4, 'little')
+           + (250_000_000).to_bytes(4, 'little') + (1).to_bytes(4, 'little') + b'\x00'
+           + bytes(3) + np.arange(1.0, 7.0).tobytes())
+    t, values = wrench_sample(cdr.read_wrench_stamped(raw))
+    assert t == pytest.approx(3.25) and values == (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+    # what the fast readers give for a Bool or a MultiArray topic named as the wrench topic
+    layout = cdr.Layout(dim=(), data_offset=0)
+    for other in (cdr.read_bool(cdr.BOOL_TRUE), cdr.MultiArray(layout, np.zeros(6)),
+                  (cdr.Stamp(1, 0),), (cdr.Stamp(1, 0), (1.0, 2.0))):
+        with pytest.raises(InputError, match='not a geometry_msgs/msg/WrenchStamped'):
+            wrench_sample(other)
+    with pytest.raises(InputError, match='nanosec'):
+        wrench_sample((cdr.Stamp(1, 1_500_000_000), values))
 
 
 def test_wrench_from_rclpy_message():
