@@ -14,12 +14,13 @@
 
 """Ground truth of recordings: the simulator's manifest beside the bags, else the truth topic."""
 
-import json
+import math
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import Truth
+from contact_detector.io.bags import MANIFEST_NAME, read_manifest
 from contact_detector.io.sensor_stream import truth_onsets
 
 
@@ -27,14 +28,52 @@ def conditions_of(bags: Sequence[Path]) -> dict:
     """
     Map bag path -> its manifest entry, from manifests beside the bags, where there are any.
 
-    Keyed by path, not name: two simulated folders both have a ``trial_0000``.
+    Keyed by path, not name: two simulated folders both have a ``trial_0000``. An entry is a
+    bag's if its ``bag`` or its ``name`` is the bag's name (or, for a ROS 1 ``.bag`` file, its
+    stem), the first such entry as :func:`contact_detector.io.bags.manifest_entry` finds it;
+    each folder's manifest is read once.
+
+    Raises
+    ------
+    BagError
+        A manifest cannot be read or is not one.
+
     """
     out = {}
-    for parent in {b.parent for b in bags}:
-        manifest = parent / 'manifest.json'
-        if manifest.exists():
-            for trial in json.loads(manifest.read_text()).get('trials', []):
-                out[parent / trial['name']] = trial
+    index: Dict[Path, Dict[str, Tuple[int, dict]]] = {}
+    for bag in bags:
+        if bag.parent not in index:
+            manifest = bag.parent / MANIFEST_NAME
+            index[bag.parent] = _entries_by_name(manifest=manifest) if manifest.is_file() else {}
+        names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
+        hits = [index[bag.parent][n] for n in names if n in index[bag.parent]]
+        if hits:
+            out[bag] = min(hits, key=lambda hit: hit[0])[1]
+    return out
+
+
+def _entries_by_name(*, manifest: Path) -> Dict[str, Tuple[int, dict]]:
+    """
+    Index a manifest's trial entries by their ``bag`` and their ``name``.
+
+    Parameters
+    ----------
+    manifest : Path
+        The ``manifest.json`` file.
+
+    Returns
+    -------
+    dict
+        Name -> the position and entry of the first trial with that ``bag`` or ``name``.
+        Entries with neither (or that are no JSON object) name no bag and are left out.
+
+    """
+    out: Dict[str, Tuple[int, dict]] = {}
+    for position, trial in enumerate(read_manifest(manifest)['trials']):
+        if isinstance(trial, dict):
+            for key in (trial.get('bag'), trial.get('name')):
+                if isinstance(key, str):
+                    out.setdefault(key, (position, trial))
     return out
 
 
@@ -43,20 +82,78 @@ def truth_for(bag: Path, events, manifest: dict, *, name: Optional[str] = None) 
     Ground truth of one bag: the manifest's entry, else the truth topic.
 
     ``name`` is the bag's name in reports (default its file name).
+
+    Raises
+    ------
+    BagError
+        The bag's manifest entry lacks ``onset_t`` or has a time that is not a finite number
+        (the message names the manifest and the trial), or the bag has neither an entry nor a
+        True on the truth topic.
+
     """
     name = name or bag.name
     info = manifest.get(bag)
     if info is not None:
-        return Truth(name=name, condition=info.get('condition', ''),
-                     onset_t=float(info['onset_t']), contact_end_t=info.get('contact_end_t'),
-                     impacts=tuple((float(i['t']), i['kind'], bool(i['in_air']))
-                                   for i in info.get('impacts', [])),
-                     phases=tuple((str(name), float(start))
-                                  for name, start, *_ in info.get('phases', [])))
+        where = f'{bag.parent / MANIFEST_NAME}: trial {info.get("name") or info.get("bag")}'
+        # checked here, where it is used, not in conditions_of: a bag a CSV labels needs none
+        try:
+            return _entry_truth(info=info, name=name)
+        except KeyError as err:
+            raise BagError(f'{where}: an impact has no {err} field') from err
+        except (TypeError, ValueError) as err:
+            raise BagError(f'{where}: {err}') from err
     onsets = truth_onsets(events)
     if not onsets:
         raise BagError(f'{bag}: no manifest entry and no True on /contact_truth')
     return Truth(name=name, condition='', onset_t=onsets[0][0])
+
+
+def _entry_truth(*, info: dict, name: str) -> Truth:
+    """
+    Build the :class:`Truth` of a manifest entry, its times checked.
+
+    Parameters
+    ----------
+    info : dict
+        The trial's manifest entry.
+    name : str
+        The bag's name in reports.
+
+    Returns
+    -------
+    Truth
+
+    Raises
+    ------
+    ValueError
+        A time is missing (``onset_t``) or not a finite number of seconds.
+    KeyError
+        An impact lacks ``t``, ``kind`` or ``in_air``.
+    TypeError
+        An impact or a phase is not shaped as the simulator writes it.
+
+    """
+    if 'onset_t' not in info:
+        raise ValueError('no onset_t')
+    end = info.get('contact_end_t')
+    return Truth(name=name, condition=info.get('condition', ''),
+                 onset_t=_seconds(info['onset_t'], field='onset_t'),
+                 contact_end_t=None if end is None else _seconds(end, field='contact_end_t'),
+                 impacts=tuple((_seconds(i['t'], field='impact t'), i['kind'],
+                                bool(i['in_air'])) for i in info.get('impacts', [])),
+                 phases=tuple((str(phase), _seconds(start, field=f'phase {phase} start'))
+                              for phase, start, *_ in info.get('phases', [])))
+
+
+def _seconds(value: Any, *, field: str) -> float:
+    """Return ``value`` as a finite time, s; else raise ValueError naming ``field``."""
+    try:
+        seconds = float(value)
+    except (TypeError, ValueError):
+        seconds = math.nan
+    if not math.isfinite(seconds):
+        raise ValueError(f'{field} is {value!r}, not a time (a finite number of seconds)')
+    return seconds
 
 
 def knocked_in_air(truth: Truth) -> bool:

@@ -24,16 +24,17 @@ report that split and a split by *trial*, and quote the trial split.
 """
 
 from dataclasses import dataclass, field
+import math
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, TypeVar
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, TypeVar
 import warnings
 
 from contact_detector.detection.offline import run_features
 from contact_detector.errors import BagError, ConfigError
-from contact_detector.evaluation.metrics import frame_labels
+from contact_detector.evaluation.metrics import frame_labels, LATE_S
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.streaming import StreamingFeatureExtractor
-from contact_detector.io.bags import manifest_entry, topic_types, TRUTH_TOPIC
+from contact_detector.io.bags import manifest_entry, open_reader, topic_types, TRUTH_TOPIC
 from contact_detector.io.sensor_stream import load_events, StreamSpec, truth_onsets
 from contact_detector.training.augmentation import augment_events, WrenchAugmentation
 import numpy as np
@@ -250,24 +251,74 @@ def read_labels_csv(path: Path) -> Dict[str, List[float]]:
     A header row is allowed. A row with an empty ``onset_start`` (``contact-detector label``
     could not label that bag; its last cell says why) is skipped with a ``UserWarning``; see
     :func:`unlabelled_bags` for those bags, and :func:`match_labels` for the bag a cell names.
+    Several rows of one bag are several contacts, at least
+    :data:`~contact_detector.evaluation.metrics.LATE_S` apart.
 
     Raises
     ------
     BagError
-        On a malformed row, naming its line.
+        The file cannot be read or is not UTF-8 text; a row is malformed, or its onset is not
+        finite (the message names its line); two rows of one bag have onsets less than
+        ``LATE_S`` apart (it names both lines).
 
     """
-    out: Dict[str, List[float]] = {}
+    return {cell: [onset for onset, _line in rows]
+            for cell, rows in _onset_rows(path=path).items()}
+
+
+def _onset_rows(*, path: Path) -> Dict[str, List[Tuple[float, int]]]:
+    """
+    Read the labelled rows of a labels CSV: ``bag`` cell -> ``(onset, line number)`` each.
+
+    The checks of :func:`read_labels_csv`, which this is with the line numbers kept (for
+    :func:`labels_for`'s messages). Its warnings point at the caller of its caller.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file.
+
+    Returns
+    -------
+    dict
+        ``bag`` cell -> its rows' onsets (s) and line numbers (from 1), in file order.
+
+    Raises
+    ------
+    BagError
+        As :func:`read_labels_csv`.
+
+    """
+    out: Dict[str, List[Tuple[float, int]]] = {}
     for number, cells, line in _label_rows(path):
         if len(cells) > 1 and cells[1] == '':
             reason = cells[-1] if len(cells) > 3 else ''
             warnings.warn(f'{path}:{number}: {cells[0]} has no onset ({reason or "no reason"})'
-                          '; skipped', UserWarning, stacklevel=2)
+                          '; skipped', UserWarning, stacklevel=3)
             continue
         if len(cells) < 2 or not _is_float(cells[1]):
             raise BagError(f'{path}:{number}: expected "bag,onset_start,onset_end", '
                            f'got {line!r}')
-        out.setdefault(cells[0], []).append(float(cells[1]))
+        onset = float(cells[1])
+        # float() reads nan and inf: scored, they would count as a late or a premature release
+        if not math.isfinite(onset):
+            raise BagError(f'{path}:{number}: onset_start {cells[1]!r} is not a time '
+                           '(a finite number of seconds)')
+        out.setdefault(cells[0], []).append((onset, number))
+    for cell, rows in out.items():
+        ordered = sorted(rows)
+        for (first, first_line), (second, second_line) in zip(ordered, ordered[1:]):
+            # score_onsets gives each onset the releases up to the next one and none within
+            # LATE_S of the previous one: one contact written twice (or two onsets closer than
+            # that) would score its release for neither, two misses
+            if second - first < LATE_S:
+                lines = sorted((first_line, second_line))
+                raise BagError(
+                    f'{path}:{lines[0]} and line {lines[1]}: onsets {first!r} and {second!r} '
+                    f'of {cell} are {(second - first) * 1000:.0f} ms apart: the rows of one '
+                    f'bag are its contacts, each given {LATE_S:g} s for its release, so rows '
+                    'closer than that score one release as two misses (remove the repeated '
+                    'row)')
     return out
 
 
@@ -306,7 +357,10 @@ def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
 
     A bag no row names keeps the truth it carries, as without ``--labels`` (simulated trials
     beside labelled recordings); for that only the topic index and the manifest are read. A bag
-    whose row has no onset is left out (:func:`read_labels_csv` has warned about it).
+    whose row has no onset is left out (:func:`read_labels_csv` has warned about it). An onset
+    outside the time its bag was recorded (its index's first to last receive time) is kept
+    with a ``UserWarning`` naming its line: the onsets are in the time of the header stamps,
+    which may run on another clock.
 
     Parameters
     ----------
@@ -323,10 +377,13 @@ def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
     ------
     BagError
         A bag has neither a row nor a truth of its own (the message names them and how to add
-        their rows), no bag is left, or :func:`match_labels` refuses a row.
+        their rows), no bag is left, or :func:`read_labels_csv` or :func:`match_labels`
+        refuses a row.
 
     """
-    onsets = match_labels(rows=read_labels_csv(csv_path), bags=bags, csv_path=csv_path)
+    rows = match_labels(rows=_onset_rows(path=csv_path), bags=bags, csv_path=csv_path)
+    _warn_outside(rows=rows, csv_path=csv_path)
+    onsets = {bag: [onset for onset, _line in found] for bag, found in rows.items()}
     skipped = match_labels(rows=unlabelled_bags(csv_path), bags=bags, csv_path=csv_path)
     left_out = [b for b in bags if b not in onsets and b in skipped]
     kept = [b for b in bags if b not in left_out]
@@ -343,6 +400,44 @@ def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
                        '(contact-detector label proposes them)')
     return CsvLabels(onsets=onsets, left_out=left_out,
                      own_truth=[b for b in kept if b not in onsets])
+
+
+def _warn_outside(*, rows: Mapping[Path, List[Tuple[float, int]]], csv_path: Path) -> None:
+    """
+    Warn about labelled onsets outside the time their bag was recorded.
+
+    A warning, not an error: the span cheaply at hand is the bag index's, in receive (log)
+    time, while the detector times frames by the header stamps. A bag re-recorded from a
+    replay, or stamped with simulated time, has those on another clock, and its right onsets
+    then lie outside the receive-time span; reading the stamps would mean reading the bag. An
+    onset in seconds from the start instead of bag time, though, is told at once.
+
+    Parameters
+    ----------
+    rows : mapping
+        Bag -> its rows' ``(onset, line number)``, s.
+    csv_path : Path
+        The CSV file, for the message.
+
+    """
+    outside = []
+    for bag, found in rows.items():
+        try:
+            with open_reader(bag) as reader:
+                start, end = reader.start_time * 1e-9, reader.end_time * 1e-9
+        except BagError:
+            continue    # a damaged bag: the command salvages it and reports what it finds
+        if not start <= end:
+            continue    # no message: nothing to compare with
+        outside += [f'{csv_path}:{line}: {onset!r} (recorded {start:.3f} to {end:.3f})'
+                    for onset, line in found if not start <= onset <= end]
+    if outside:
+        warnings.warn(
+            f'labelled onsets outside the time their bag was recorded ({len(outside)}): '
+            + '; '.join(outside[:5]) + ('; ...' if len(outside) > 5 else '')
+            + '. Onsets are in bag time (header stamps, s), not seconds from the start; if the '
+            "bags' stamps run on another clock than their receive times, they may be right",
+            UserWarning, stacklevel=3)
 
 
 def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path) -> Dict[Path, T]:
@@ -400,7 +495,15 @@ def match_labels(*, rows: Mapping[str, T], bags: Sequence[Path], csv_path: Path)
 
 
 def _label_rows(path: Path):
-    for number, line in enumerate(Path(path).read_text().splitlines(), start=1):
+    # the error a malformed row gets, which the commands print as one line, not a traceback
+    try:
+        text = Path(path).read_text(encoding='utf-8')
+    except OSError as err:
+        raise BagError(f'cannot read labels {path}: {err.strerror or err}') from err
+    except UnicodeDecodeError as err:
+        raise BagError(f'cannot read labels {path}: not UTF-8 text ({err.reason} at byte '
+                       f'{err.start})') from err
+    for number, line in enumerate(text.splitlines(), start=1):
         cells = [c.strip() for c in line.split(',')]
         header = number == 1 and len(cells) > 1 and not _is_float(cells[1]) and cells[1] != ''
         if not line.strip() or header:

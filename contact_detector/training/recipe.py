@@ -31,7 +31,8 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import BagError
-from contact_detector.evaluation.metrics import score_onsets, score_trial, summarize, Truth
+from contact_detector.evaluation.metrics import score_onsets, score_trial, summarize
+from contact_detector.evaluation.truth import truth_for
 from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig, SHIFT_FEATURES)
 from contact_detector.io.discovery import Streams
@@ -356,13 +357,10 @@ def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec
             outcomes.extend(score_onsets(name=bag.name, condition='recordings',
                                          onsets=labels[bag], events=run.events))
             continue
-        info = manifest.get(bag)
-        if info is None:
+        if manifest.get(bag) is None:
             continue
-        truth = Truth(name=bag.name, condition=info.get('condition', ''),
-                      onset_t=info['onset_t'], contact_end_t=info.get('contact_end_t'),
-                      impacts=tuple((i['t'], i['kind'], i['in_air'])
-                                    for i in info.get('impacts', [])))
+        # the manifest entry's times checked (BagError naming the trial), as evaluate does
+        truth = truth_for(bag, events, manifest, name=bag.name)
         outcomes.append(score_trial(truth=truth, releases=run.releases, events=run.events))
     return summarize(outcomes)
 

@@ -12,12 +12,17 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Which bag each row of a labels CSV names, and what reports call each bag."""
+"""Which bag each row of a labels CSV names, what reports call each bag, and bad rows."""
+
+import re
+import warnings
 
 from contact_detector.errors import BagError
-from contact_detector.io.bags import recording_names
-from contact_detector.training.protocol import match_labels
+from contact_detector.evaluation.metrics import LATE_S
+from contact_detector.io.bags import jazzy_typestore, recording_names, TRUTH_TOPIC
+from contact_detector.training.protocol import labels_for, match_labels, read_labels_csv
 import pytest
+from rosbags.rosbag2 import Writer
 
 
 @pytest.fixture
@@ -59,3 +64,86 @@ def test_a_row_that_could_name_several_bags_or_a_bag_named_twice_is_an_error(day
     with pytest.raises(BagError, match='both name'):
         match_labels(rows={'only_here.bag': 1.0, 'day2/only_here.bag': 2.0}, bags=bags,
                      csv_path=root / 'labels.csv')
+
+
+# --- labels that cannot be right (docs: contact-detector label, evaluate --labels) -----------
+
+
+def _csv(path, *rows):
+    path.write_text('\n'.join(['bag,onset_start,onset_end', *rows]) + '\n')
+    return path
+
+
+@pytest.mark.parametrize('content', [None, b'\xf4\x80garbage,\xff\n', 'directory'])
+def test_a_labels_file_that_does_not_read_is_a_bag_error_naming_it(tmp_path, content):
+    csv = tmp_path / 'labels.csv'
+    if content == 'directory':
+        csv.mkdir()
+    elif content is not None:
+        csv.write_bytes(content)
+    # the error evaluate and train print as one line (a FileNotFoundError or a
+    # UnicodeDecodeError would be a traceback)
+    for read in (lambda: read_labels_csv(csv),
+                 lambda: labels_for(csv_path=csv, bags=[tmp_path / 'trial_0000'])):
+        with pytest.raises(BagError, match=f'cannot read labels {re.escape(str(csv))}: '):
+            read()
+
+
+@pytest.mark.parametrize('onset', ['nan', 'NaN', 'inf', '-inf', 'Infinity'])
+def test_an_onset_that_is_no_finite_time_is_refused_naming_its_line(tmp_path, onset):
+    csv = _csv(tmp_path / 'labels.csv', 'a,10.0,10.1', f'b,{onset},{onset}')
+    with pytest.raises(BagError, match=re.escape(f'{csv}:3: onset_start {onset!r}')):
+        read_labels_csv(csv)
+    # as the first line too, where a header may stand
+    csv.write_text(f'b,{onset},{onset}\n')
+    with pytest.raises(BagError, match=re.escape(f'{csv}:1: ')):
+        read_labels_csv(csv)
+
+
+@pytest.mark.parametrize('gap', [0.0, 0.001, LATE_S - 0.01])
+def test_rows_of_one_bag_closer_than_the_late_window_are_refused_naming_both(tmp_path, gap):
+    # one contact written twice (or twice near enough): its release would score two misses
+    csv = _csv(tmp_path / 'labels.csv', f'a,{10.0 + gap!r},10.1', 'b,10.0,10.1', 'a,10.0,10.1')
+    with pytest.raises(BagError, match=re.escape(f'{csv}:2 and line 4: ') + '.* of a are'):
+        read_labels_csv(csv)
+    with pytest.raises(BagError, match=re.escape(f'{csv}:2 and line 4: ')):
+        labels_for(csv_path=csv, bags=[tmp_path / 'a', tmp_path / 'b'])
+
+
+def test_rows_of_one_bag_far_enough_apart_are_several_contacts(tmp_path):
+    csv = _csv(tmp_path / 'labels.csv', 'a,13.0,13.1', 'a,10.0,10.1', f'a,{10.0 + LATE_S!r},1',
+               'b,10.0,10.1')
+    assert read_labels_csv(csv) == {'a': [13.0, 10.0, 10.0 + LATE_S], 'b': [10.0]}
+    # bags that are no bags here: nothing to compare the onsets with, no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        labels = labels_for(csv_path=csv, bags=[tmp_path / 'a', tmp_path / 'b'])
+    assert labels.onsets == {tmp_path / 'a': [13.0, 10.0, 10.0 + LATE_S],
+                             tmp_path / 'b': [10.0]}
+
+
+def _bag(path, *seconds):
+    """Write a rosbag2 of /contact_truth messages logged at ``seconds``; return its path."""
+    store = jazzy_typestore()
+    kind = 'std_msgs/msg/Bool'
+    with Writer(path, version=9) as writer:
+        topic = writer.add_connection(TRUTH_TOPIC, kind, typestore=store)
+        for t in seconds:
+            writer.write(topic, int(t * 1e9), store.serialize_cdr(
+                store.types[kind](data=False), kind))
+    return path
+
+
+def test_an_onset_outside_the_recording_is_kept_with_a_warning_naming_its_line(tmp_path):
+    bags = [_bag(tmp_path / 'a', 1000.0, 1010.0), _bag(tmp_path / 'b', 2000.0, 2010.0)]
+    # seconds from the start of the recording instead of bag time: a usual slip
+    csv = _csv(tmp_path / 'labels.csv', 'a,1005.0,1005.1', 'b,5.0,5.1')
+    with pytest.warns(UserWarning, match=re.escape(f'{csv}:3: 5.0 (recorded 2000.000 to ')):
+        labels = labels_for(csv_path=csv, bags=bags)
+    # a warning, not an error: stamps on another clock than the receive times may be right
+    assert labels.onsets == {bags[0]: [1005.0], bags[1]: [5.0]}
+    _csv(csv, 'a,1005.0,1005.1', 'b,2010.0,2010.1')
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        assert labels_for(csv_path=csv, bags=bags).onsets == {bags[0]: [1005.0],
+                                                              bags[1]: [2010.0]}
