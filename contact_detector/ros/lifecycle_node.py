@@ -39,16 +39,15 @@ cleanup, shutdown
 See ``docs/node.md``.
 """
 
-import gc
 import sys
 from typing import Any, Optional
 
 from contact_detector.errors import ConfigError, ModelError
-from contact_detector.ros.node import DetectorWiring
+from contact_detector.ros.node import DetectorWiring, spin_node
 from contact_detector.ros.params import config_from_values, current_values, declare_all
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.node import Node
 
 
 class ContactDetectorLifecycleNode(DetectorWiring, LifecycleNode):
@@ -93,12 +92,12 @@ class ContactDetectorLifecycleNode(DetectorWiring, LifecycleNode):
         """Check the parameters, load the model, create the publishers and services."""
         try:
             self._load(config_from_values(current_values(self)), None)
+            self._create_outputs(self.create_lifecycle_publisher)
         except (ConfigError, ModelError) as err:
             self.get_logger().error(f'configure failed: {err}')
             self._unload()
             return TransitionCallbackReturn.FAILURE
         self._log_loaded()
-        self._create_outputs(self.create_lifecycle_publisher)
         return super().on_configure(state)
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -145,25 +144,13 @@ def main(args: Optional[list] = None) -> int:
     It starts unconfigured and waits for its transitions; rclpy's SingleThreadedExecutor runs
     it (``executor.*`` parameters are not used). Returns the exit code.
     """
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = ContactDetectorLifecycleNode()
+    def single_threaded(node: Node) -> SingleThreadedExecutor:
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        gc.freeze()
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ConfigError as err:
-        rclpy.logging.get_logger('contact_detector').fatal(f'cannot start: {err}')
-        code = 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+        return executor
+
+    return spin_node(args=args, make_node=ContactDetectorLifecycleNode,
+                     make_exec=single_threaded)
 
 
 if __name__ == '__main__':

@@ -80,6 +80,7 @@ from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.clock import ClockChange, JumpThreshold
 from rclpy.duration import Duration
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile,
@@ -246,12 +247,18 @@ class DetectorWiring(DiagnosticsMixin):
         # One second of frames: a reliable subscriber that stalls briefly loses nothing.
         output_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
                                 reliability=ReliabilityPolicy.RELIABLE)
+        # The gripper's topic first: the one name a user gives, refused before anything exists
+        self.gripper_pub = None
+        if cfg.gripper_enabled:
+            try:
+                self.gripper_pub = make_publisher(JointTrajectory, cfg.gripper_topic, output_qos)
+            except NameValidationException as err:
+                raise ConfigError(f'parameter gripper.topic={cfg.gripper_topic!r} is not a valid '
+                                  f'topic name: {err}') from err
         self.contact_pub = make_publisher(Bool, 'contact', output_qos)
         self.probability_pub = make_publisher(Float32, 'contact_probability', output_qos)
         self.release_pub = make_publisher(Bool, 'release', output_qos)
         self.diagnostics_pub = make_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.gripper_pub = (make_publisher(JointTrajectory, cfg.gripper_topic, output_qos)
-                            if cfg.gripper_enabled else None)
         self.arm_srv = self.create_service(SetBool, '~/arm', self._on_arm)
         self.reset_srv = self.create_service(Trigger, '~/reset', self._on_reset)
 
@@ -364,6 +371,16 @@ class DetectorWiring(DiagnosticsMixin):
             more = f' ({suppressed} more since the last report)' if suppressed else ''
             self.get_logger().warning(message + more)
 
+    def _undecodable(self, kind: str, err: BaseException, now: float, entry: float) -> None:
+        # A message whose bytes do not deserialise is dropped like any corrupt message:
+        # counted, a hold-off, and for audio a restarted stream (the samples on either side
+        # of it are not joined into one frame).
+        stream = self.audio if kind == 'audio' else self.wrench
+        stream.last_rx = now
+        stream.received += 1
+        reason = f'cannot deserialise it: {type(err).__name__}: {err}'
+        self._handle(self.detector.drop(kind=kind, reason=reason, stamp=now), now, entry, kind)
+
     def _callback_failed(self, where: str, err: BaseException) -> None:
         self.counts['callback_errors'] += 1
         self._warn(f'error-{where}', f'{where} callback failed and dropped its message: '
@@ -413,9 +430,13 @@ class DetectorWiring(DiagnosticsMixin):
         try:
             now = self._now()
             if isinstance(msg, bytes):
-                fast = self._read_audio(msg)
-                msg = (fast if fast is not None
-                       else deserialize_message(msg, self._audio_class))
+                try:
+                    fast = self._read_audio(msg)
+                    msg = (fast if fast is not None
+                           else deserialize_message(msg, self._audio_class))
+                except Exception as err:  # truncated or corrupt bytes: bad input, not a bug
+                    self._undecodable('audio', err, now, entry)
+                    return
             self._receive_audio(msg, now, entry)
         except Exception as err:  # a callback must never raise
             self._callback_failed('audio', err)
@@ -466,8 +487,12 @@ class DetectorWiring(DiagnosticsMixin):
         try:
             now = self._now()
             if isinstance(msg, bytes):
-                fast = read_wrench_stamped(msg)
-                msg = fast if fast is not None else deserialize_message(msg, WrenchStamped)
+                try:
+                    fast = read_wrench_stamped(msg)
+                    msg = fast if fast is not None else deserialize_message(msg, WrenchStamped)
+                except Exception as err:  # truncated or corrupt bytes: bad input, not a bug
+                    self._undecodable('wrench', err, now, entry)
+                    return
             self._receive_wrench(msg, now, entry)
         except Exception as err:  # a callback must never raise
             self._callback_failed('wrench', err)
@@ -732,14 +757,40 @@ def make_executor(node: ContactDetectorNode) -> Executor:
     return executor
 
 
-def main(args: Optional[list] = None) -> int:
-    """Run the node (``ros2 run contact_detector contact_detector_node``); return the exit code."""
-    rclpy.init(args=args)
+def spin_node(*, args: Optional[list], make_node: Callable[[], Node],
+              make_exec: Callable[[Node], Executor]) -> int:
+    """
+    Start rclpy, build a node and spin it until shutdown; return the exit code.
+
+    A wrong configuration, whether the node's checks or rclpy's own (arguments it cannot
+    parse, a parameter of the wrong type for rclpy), is one FATAL line and exit code 1, never
+    a traceback; SIGINT and an external shutdown are 0.
+
+    Parameters
+    ----------
+    args : list or None
+        Command-line arguments for ``rclpy.init`` (None: ``sys.argv``).
+    make_node : callable
+        Builds the node, in the initialised default context.
+    make_exec : callable
+        Builds the executor that spins it.
+
+    Returns
+    -------
+    int
+
+    """
+    logger = rclpy.logging.get_logger('contact_detector')
+    try:
+        rclpy.init(args=args)
+    except Exception as err:  # rclpy's own errors for bad arguments have no common base
+        logger.fatal(f'cannot start: bad ROS arguments: {err}')
+        return 1
     node = None
     code = 0
     try:
-        node = ContactDetectorNode()
-        executor = make_executor(node)
+        node = make_node()
+        executor = make_exec(node)
         # The model and the compiled forest live as long as the process: keep them out of
         # the garbage collector's full passes (shorter pauses in the callbacks).
         gc.freeze()
@@ -747,13 +798,21 @@ def main(args: Optional[list] = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ConfigError, ModelError) as err:
-        rclpy.logging.get_logger('contact_detector').fatal(f'cannot start: {err}')
+        logger.fatal(f'cannot start: {err}')
+        code = 1
+    except ParameterException as err:   # from rclpy, e.g. use_sim_time:=notabool
+        logger.fatal(f'cannot start: parameter: {err}')
         code = 1
     finally:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
     return code
+
+
+def main(args: Optional[list] = None) -> int:
+    """Run the node (``ros2 run contact_detector contact_detector_node``); return the exit code."""
+    return spin_node(args=args, make_node=ContactDetectorNode, make_exec=make_executor)
 
 
 if __name__ == '__main__':

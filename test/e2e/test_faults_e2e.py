@@ -209,3 +209,24 @@ def test_invalid_parameter_stops_the_node_process(model, param, value, match):
                           text=True, timeout=60)
     assert done.returncode == 1, done.stderr
     assert 'cannot start' in done.stderr and match in done.stderr, done.stderr
+
+
+@pytest.mark.parametrize('args, match', [
+    (['-p', 'gripper.enabled:=true', '-p', 'gripper.topic:=bad topic!'],
+     'not a valid topic name'),
+    (['-p', 'use_sim_time:=notabool'], 'use_sim_time'),
+    (['-p', 'qos.depth:= '], 'qos.depth was given no value'),
+    (['-p', 'model.path:='], 'bad ROS arguments'),
+    (['-r', '__node:=1bad'], 'bad ROS arguments'),
+    (['--params-file', '/nonexistent/params.yaml'], 'bad ROS arguments'),
+])
+def test_what_rclpy_refuses_stops_the_node_process_too(model, args, match):
+    # rclpy's own refusals (argument parsing, names, types of its parameters) are a wrong
+    # configuration too: one FATAL line and exit status 1, no traceback
+    cmd = [sys.executable, '-m', 'contact_detector.ros.node', '--ros-args',
+           '-p', f'model.path:={model}', *args]
+    done = subprocess.run(cmd, cwd=TEST_DIR.parent, env=dict(os.environ), capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 1, done.stderr
+    assert 'cannot start' in done.stderr and match in done.stderr, done.stderr
+    assert 'Traceback' not in done.stderr, done.stderr

@@ -224,6 +224,7 @@ def test_release_only_while_active(manager_factory, trial):
     ({'model.path': '/nonexistent/model.joblib'}, 'model.joblib does not exist'),
     ({'audio.stamp_source': 'header'}, "audio.stamp_source='header' needs a stamped"),
     ({'wrench.rate': 20000.0}, 'outside'),
+    ({'gripper.enabled': True, 'gripper.topic': 'bad topic!'}, 'not a valid topic name'),
 ])
 def test_configure_fails_cleanly(manager_factory, params, reason):
     m = manager_factory(**params)

@@ -642,12 +642,15 @@ def test_serialised_input_fallback_and_garbage(harness_factory, trial):
     node._on_wrench(big_endian_wrench(t + 0.004, [np.nan, 2.0, 3.0, 0.1, 0.2, 0.3]))
     counts = node.detector_counts()
     assert counts['wrench_dropped'] == 1 and counts['callback_errors'] == 0
-    # Bytes nothing can read are logged, counted and dropped.
+    # Bytes nothing can read (a truncated message) are bad input like any other: logged,
+    # counted as dropped, releases held off; not a failed callback.
     node._on_wrench(b'\x00\x01\x00\x00\x01')
     node._on_audio(b'\x00\x01\x00\x00\x01\x00')
     counts = node.detector_counts()
-    assert counts['callback_errors'] == 2
+    assert counts['callback_errors'] == 0
+    assert counts['wrench_dropped'] == 2 and counts['audio_dropped'] == 1
     assert counts['wrench_msgs'] == 3 and counts['audio_msgs'] == 0
+    assert 'cannot deserialise' in node.detector.last_error
 
 
 # --- time ----------------------------------------------------------------------------------------
