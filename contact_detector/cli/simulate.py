@@ -93,6 +93,11 @@ def build_parser() -> argparse.ArgumentParser:
                              'against the motion; friction: the friction against the motion '
                              'plus the sideways push that makes it (friction coefficient '
                              '0.2-1.0)')
+    parser.add_argument('--sensor-offset', type=_offset_pair, default=None, metavar='N,NM',
+                        help='untared sensors read a constant offset of up to N newtons and NM '
+                             'newton metres (vector lengths, uniform): a sensor never zeroed. '
+                             "Default: each set's own, up to 3 N and 0.3 N m (zeroed with "
+                             'the empty hand, then drifting); the same trials otherwise')
     parser.add_argument('--hits', choices=HIT_KINDS, default=None,
                         help='give every trial this kind of exogenous event instead of the '
                              "set's cycle (mixed: any of hand, table, touch, brush, setdown "
@@ -101,6 +106,15 @@ def build_parser() -> argparse.ArgumentParser:
                         help='replace existing trial_* bags and manifest.json in OUT_DIR')
     parser.add_argument('--quiet', action='store_true', help='no progress bar or summary')
     return parser
+
+
+def _offset_pair(text: str) -> tuple[float, float]:
+    """Parse ``N,NM`` (checked by the simulator: ConfigError -> usage error)."""
+    try:
+        force, torque = (float(v) for v in text.split(','))
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'expected N,NM (two numbers), got {text!r}') from err
+    return force, torque
 
 
 def _prepare(out_dir: Path, *, overwrite: bool) -> None:
@@ -134,7 +148,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                        audio_rate=args.audio_rate, ft_rate=args.ft_rate,
                        chunk_size=args.chunk_size, label_window_s=args.label_window,
                        events=args.events, tared=args.tared, hits=args.hits,
-                       contact_sound=args.contact_sound, brushes=args.brushes)
+                       contact_sound=args.contact_sound, brushes=args.brushes,
+                       sensor_offset=args.sensor_offset)
     except ContactDetectorError as err:
         parser.error(str(err))
     try:
@@ -144,7 +159,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  ft_rate=args.ft_rate, chunk_size=args.chunk_size,
                                  label_window_s=args.label_window, events=args.events,
                                  tared=args.tared, hits=args.hits,
-                                 contact_sound=args.contact_sound, brushes=args.brushes)
+                                 contact_sound=args.contact_sound, brushes=args.brushes,
+                                 sensor_offset=args.sensor_offset)
         settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
                     'conditions': list(conditions), 'storage': args.storage,
                     'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
@@ -155,6 +171,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             settings['contact_sound'] = args.contact_sound
         if args.brushes != 'lifting':
             settings['brushes'] = args.brushes
+        if args.sensor_offset is not None:
+            settings['sensor_offset'] = list(args.sensor_offset)
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -182,8 +182,30 @@ def _chunks(*, p: TrialParams, rng: np.random.Generator, n: int, rate: int,
     return ends, jitter, n
 
 
+#: The parameters :func:`simulate_trial`'s ``sensor_offset`` scales, force then torque.
+OFFSET_PARAMS = ('force_bias_n', 'torque_bias_nm')
+
+#: The largest ``sensor_offset`` accepted, N and N m: beyond a wrist sensor's range.
+MAX_SENSOR_OFFSET = (1000.0, 100.0)
+
+
+def _scaled_offsets(*, p, ranges: dict, largest: tuple) -> dict:
+    """
+    Map the drawn offset lengths onto ``[0, largest]``, at the same quantiles.
+
+    ``v' = (v - lo) / (hi - lo) * largest`` for the set's range ``[lo, hi]`` of each of
+    :data:`OFFSET_PARAMS` (both uniform), so that no other draw changes.
+    """
+    out = {}
+    for name, top in zip(OFFSET_PARAMS, largest):
+        spec = ranges[name]
+        share = (getattr(p, name) - spec.low) / (spec.high - spec.low)
+        out[name] = float(share * top)
+    return out
+
+
 def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s, hits,
-                events, tared, contact_sound, brushes) -> None:
+                events, tared, contact_sound, brushes, sensor_offset=None) -> None:
     for name, value in (('seed', seed), ('index', index)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
             raise ConfigError(f'{name} must be an int >= 0, got {value!r}')
@@ -209,13 +231,22 @@ def _check_args(*, seed, index, audio_rate, ft_rate, chunk_size, label_window_s,
                           f'got {contact_sound!r}')
     if brushes not in BRUSH_MODES:
         raise ConfigError(f'brushes must be one of {BRUSH_MODES}, got {brushes!r}')
+    if sensor_offset is not None:
+        try:
+            force, torque = (float(v) for v in sensor_offset)
+        except (TypeError, ValueError) as err:
+            raise ConfigError(f'sensor_offset must be (N, N m), got {sensor_offset!r}') from err
+        if not (0.0 <= force <= MAX_SENSOR_OFFSET[0] and 0.0 <= torque <= MAX_SENSOR_OFFSET[1]):
+            raise ConfigError(f'sensor_offset must be in [0, {MAX_SENSOR_OFFSET[0]:g}] N and '
+                              f'[0, {MAX_SENSOR_OFFSET[1]:g}] N m, got {sensor_offset!r}')
 
 
 def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rate: int = 16000,
                    ft_rate: float = 100.0, chunk_size: int | None = None,
                    label_window_s: float = 0.1, hits: str | None = None,
                    events: str = 'family', tared: str = 'family',
-                   contact_sound: str = 'family', brushes: str = 'lifting') -> Trial:
+                   contact_sound: str = 'family', brushes: str = 'lifting',
+                   sensor_offset: tuple[float, float] | None = None) -> Trial:
     """
     Synthesise one trial.
 
@@ -268,6 +299,13 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
         makes it, with a friction coefficient of 0.2-1.0
         (:func:`~contact_detector.sim.hits.friction_brush`); the rest of the trial is the one
         'lifting' gives.
+    sensor_offset : (float, float) or None
+        The largest length of the untared sensor's constant offset (bias) vector, force in N
+        and torque in N m: a sensor that was never zeroed. None (default): the set's ranges
+        (up to 3 N and 0.3 N m: a sensor zeroed with the empty hand, then drifting). The
+        lengths are the same quantiles of the new ranges ``[0, N]``, ``[0, NM]`` as the set's
+        draw of its own, and their directions are unchanged, so the trial is the one None
+        gives but for the offset. A tared sensor reads no offset either way.
 
     Returns
     -------
@@ -281,11 +319,14 @@ def simulate_trial(*, seed: int, index: int, condition: str = 'paper', audio_rat
     """
     _check_args(seed=seed, index=index, audio_rate=audio_rate, ft_rate=ft_rate,
                 chunk_size=chunk_size, label_window_s=label_window_s, hits=hits,
-                events=events, tared=tared, contact_sound=contact_sound, brushes=brushes)
+                events=events, tared=tared, contact_sound=contact_sound, brushes=brushes,
+                sensor_offset=sensor_offset)
     cond = get_condition(condition)
     seed, index, audio_rate, ft_rate = int(seed), int(index), int(audio_rate), float(ft_rate)
     rng = np.random.default_rng([seed, index])
     p = cond.sample(rng)
+    if sensor_offset is not None:
+        p = replace(p, **_scaled_offsets(p=p, ranges=cond.ranges, largest=sensor_offset))
     drawn_kind = HIT_KINDS[int(rng.integers(0, 3))]
     fam_rng = np.random.default_rng([seed, index, 6])
     q, _drawn = cond.sample_family(fam_rng)

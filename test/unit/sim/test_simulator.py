@@ -752,6 +752,40 @@ def test_tared_none_unzeroes_the_sensors_a_family_tares_and_changes_nothing_else
     assert manifest['trials'][0]['params']['family']['tared'] is False
 
 
+def test_sensor_offset_scales_the_never_zeroed_offset_and_changes_nothing_else(tmp_path):
+    n = 6
+    base = list(simulate_trials(n=n, seed=SEED, conditions=['paper', 'slow_partial'],
+                                hits='none', tared='none'))
+    big = list(simulate_trials(n=n, seed=SEED, conditions=['paper', 'slow_partial'],
+                               hits='none', tared='none', sensor_offset=(30.0, 1.5)))
+    for a, b in zip(base, big):
+        # the same quantile of [0, 30] N as of the set's [0, 3] N: ten times the length
+        assert b.params['force_bias_n'] == pytest.approx(10 * a.params['force_bias_n'])
+        assert b.params['torque_bias_nm'] == pytest.approx(5 * a.params['torque_bias_nm'])
+        assert a.onset_t == b.onset_t and np.array_equal(a.audio, b.audio)
+        # before the contact the wrench differs by a constant vector of nine times the
+        # set's offset, up to one quantisation step
+        j = int(np.searchsorted(a.wrench_t, a.onset_t))
+        diff = b.force[:j] - a.force[:j]
+        assert np.ptp(diff, axis=0).max() <= a.params['force_quant_n'] + 1e-9
+        assert np.linalg.norm(diff.mean(axis=0)) == pytest.approx(
+            9 * a.params['force_bias_n'], abs=a.params['force_quant_n'] * 2)
+    # a tared sensor reads no offset either way
+    tared = list(simulate_trials(n=2, seed=SEED, conditions=['paper'], tared='all',
+                                 sensor_offset=(30.0, 1.5)))
+    for trial in tared:
+        fb, _ = _rest_wrench(trial)
+        assert np.linalg.norm(fb, axis=1).mean() < 1.0
+    with pytest.raises(ConfigError, match='sensor_offset'):
+        simulate_trial(seed=SEED, index=0, sensor_offset=(-1.0, 0.1))
+    # the command line takes it and records it
+    assert simulate_main([str(tmp_path / 'x'), '--trials', '1', '--tared', 'none',
+                          '--sensor-offset', '30,1.5', '--quiet']) == 0
+    manifest = read_manifest(tmp_path / 'x')
+    assert manifest['settings']['sensor_offset'] == [30.0, 1.5]
+    assert 0.0 <= manifest['trials'][0]['params']['force_bias_n'] <= 30.0
+
+
 @pytest.mark.slow
 def test_tared_everywhere_draws_both_and_an_untared_draw_is_the_family_trial():
     n = 48  # four trials of each of the twelve sets
