@@ -159,6 +159,9 @@ def plot_bag(*, bag: Path, output: Path, config: FeatureConfig, audio_rate: floa
         print(f'{PROG}: warning: {line}', file=sys.stderr)
     print(f'{PROG}: {bag.name}: {streams.describe()}')
     wrench = read_wrench(bag, topic=streams.wrench_topic)
+    if wrench.dropped:
+        # the figure shows what is left: say what is not in it
+        print(f'{PROG}: warning: {bag.name}: {wrench.describe_drops()}', file=sys.stderr)
     rate = streams.audio_rate
     audio = read_audio_series(bag, spec=StreamSpec(
         wrench_topic=streams.wrench_topic, audio_topic=streams.audio_topic,

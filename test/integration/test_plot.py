@@ -39,3 +39,15 @@ def test_plot_refuses_what_is_not_a_bag(tmp_path, capsys):
     assert plot_cli.main([str(tmp_path / 'notes.txt'), '-o', str(tmp_path / 'x.png')]) == 1
     assert 'not a bag' in capsys.readouterr().err
     assert not (tmp_path / 'x.png').exists()
+
+
+def test_plot_says_which_f_t_messages_are_not_in_the_figure(tmp_path, capsys):
+    trial = simulate_trial(seed=4, index=0, condition='paper')
+    trial.force[100:110, 0] = float('nan')      # ten broken messages from the sensor
+    bag = write_trial_bag(trial=trial, path=tmp_path / trial.name)
+    assert plot_cli.main([str(bag), '-o', str(tmp_path / 'fig.png')]) == 0
+    assert 'dropped 10 of' in capsys.readouterr().err
+    clean = simulate_trial(seed=4, index=1, condition='paper')
+    bag = write_trial_bag(trial=clean, path=tmp_path / clean.name)
+    assert plot_cli.main([str(bag), '-o', str(tmp_path / 'clean.png')]) == 0
+    assert 'dropped' not in capsys.readouterr().err
