@@ -614,6 +614,12 @@ class WrenchSeries(NamedTuple):
                 + ', '.join(parts))
 
 
+#: A stamp this far (s) ahead of the next one, which follows the one before it, is a lone
+#: jump forward; :func:`read_wrench` drops it (the node's ``check_stamp`` takes a jump back
+#: of more than this for a time jump, not a reordering).
+LONE_JUMP_S = 0.5
+
+
 def read_wrench(path: Path, *, topic: str = WRENCH_TOPIC) -> WrenchSeries:
     """
     Read a ``geometry_msgs/WrenchStamped`` topic into arrays (stamps from the headers).
@@ -622,7 +628,9 @@ def read_wrench(path: Path, *, topic: str = WRENCH_TOPIC) -> WrenchSeries:
     (:func:`~contact_detector.io.messages.wrench_sample`), and the messages the detector would
     not use are left out and counted (:class:`WrenchSeries`; the caller reports them): refused
     ones (an invalid stamp, missing fields), NaN/Inf values, and stamps that repeat or go back
-    (kept: strictly increasing stamps, in the order the bag holds them).
+    (kept: strictly increasing stamps, in the order the bag holds them). A lone stamp more than
+    :data:`LONE_JUMP_S` ahead of the next one, which follows the one before it, is the one
+    left out, not every sample after it.
 
     Raises
     ------
@@ -648,9 +656,16 @@ def read_wrench(path: Path, *, topic: str = WRENCH_TOPIC) -> WrenchSeries:
             non_finite += 1
             continue
         if not stamp > last:
-            # a sorted copy would hide a reordering the detector sees (and refuses) live
+            if len(t) >= 2 and t[-2] < stamp < last - LONE_JUMP_S:
+                # the sample before this one was a lone stamp far ahead of its neighbours:
+                # drop it, not every later sample (the detector resets on the jump back)
+                t.pop()
+                values.pop()
+            else:
+                # a sorted copy would hide a reordering the detector sees (and refuses) live
+                out_of_order += 1
+                continue
             out_of_order += 1
-            continue
         last = stamp
         t.append(stamp)
         values.append(six)

@@ -205,6 +205,11 @@ def test_read_wrench_drops_and_counts_what_the_detector_would_not_use(tmp_path):
         'values, 2 with a stamp that repeats or precedes the previous one')
     clean = read_wrench(_wrench_bag(tmp_path / 'clean', stamps[:2]), topic='/ft')
     assert clean.dropped == 0 and clean.describe_drops() == ''
+    # one stamp an hour ahead: that one is left out, not every sample after it
+    lone = [(5, 0), (5, 10 * ms), (3605, 20 * ms), (5, 30 * ms), (5, 40 * ms), (5, 50 * ms)]
+    w = read_wrench(_wrench_bag(tmp_path / 'lone', lone), topic='/ft')
+    np.testing.assert_allclose(w.t, [5.0, 5.01, 5.03, 5.04, 5.05])
+    assert w.out_of_order == 1
     # another type under the name: refused by name, not an AttributeError
     with pytest.raises(BagError, match='/vec holds geometry_msgs/msg/Vector3Stamped, not '
                                        'geometry_msgs/msg/WrenchStamped'):
