@@ -39,8 +39,7 @@ from typing import Optional, Sequence
 
 from contact_detector.errors import BagError, ConfigError, ContactDetectorError
 from contact_detector.evaluation.labelling import Proposal, propose_onset
-from contact_detector.features.resample import (INTEGER_TOLERANCE, MAX_INPUT_RATE,
-                                                MIN_INPUT_RATE)
+from contact_detector.features.resample import check_input_rate
 from contact_detector.io.bags import (find_bags, manifest_entry, read_wrench,
                                       recording_names, topic_types)
 from contact_detector.io.discovery import (discover_streams, find_wrench_topic,
@@ -72,32 +71,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--audio-topic', default=None)
     parser.add_argument('--audio-rate', type=float, default=None, metavar='HZ')
     return parser
-
-
-def check_wrench_rate(*, rate: float, topic: str, source: str) -> None:
-    """
-    Refuse an F/T rate that ``detect`` refuses: outside [50, 10000] Hz (1 % slack).
-
-    Parameters
-    ----------
-    rate : float
-        F/T rate, Hz.
-    topic : str
-        The wrench topic, for the message.
-    source : str
-        Where the rate comes from, for the message.
-
-    Raises
-    ------
-    BagError
-        The rate is outside the range (the bag is then unreadable, as for ``detect``).
-
-    """
-    # the bounds and slack of detect's resampler, so label refuses exactly what detect refuses
-    slack = 1.0 + INTEGER_TOLERANCE
-    if not MIN_INPUT_RATE / slack <= rate <= MAX_INPUT_RATE * slack:
-        raise BagError(f'wrench rate {rate:.4g} Hz of {topic} ({source}) is outside '
-                       f'[{MIN_INPUT_RATE:g}, {MAX_INPUT_RATE:g}] Hz')
 
 
 def label_bag(bag: Path, *,
@@ -157,7 +130,10 @@ def label_bag(bag: Path, *,
                            f'usable samples ({wrench.describe_drops() or "one message"})'
                            ) from err
         source = 'measured from the header stamps kept'
-    check_wrench_rate(rate=w_rate, topic=wrench_topic, source=source)
+    try:
+        check_input_rate(rate=w_rate)       # what detect's resampler refuses
+    except ConfigError as err:
+        raise BagError(f'{err} ({wrench_topic}, {source})') from err
     t, force, torque = wrench.t, wrench.force, wrench.torque
     proposal = propose_onset(ft_t=t, force=force, torque=torque, audio=audio,
                              audio_rate=rate, audio_t0=audio_t0)

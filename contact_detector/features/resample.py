@@ -60,6 +60,28 @@ MAX_INPUT_RATE = 10000.0
 INTEGER_TOLERANCE = 0.01
 
 
+def check_input_rate(*, rate: float) -> None:
+    """
+    Refuse a wrench rate the resampler cannot take.
+
+    Parameters
+    ----------
+    rate : float
+        Wrench rate, Hz: in [MIN_INPUT_RATE, MAX_INPUT_RATE] with 1 % slack
+        (:data:`INTEGER_TOLERANCE`), as a measured 10 kHz may read 10010 Hz.
+
+    Raises
+    ------
+    ConfigError
+        Not finite, or outside the range.
+
+    """
+    slack = 1.0 + INTEGER_TOLERANCE
+    if not (math.isfinite(rate) and MIN_INPUT_RATE / slack <= rate <= MAX_INPUT_RATE * slack):
+        raise ConfigError(f'wrench rate {rate:g} Hz is outside [{MIN_INPUT_RATE:g}, '
+                          f'{MAX_INPUT_RATE:g}] Hz')
+
+
 def integer_ratio(*, input_rate: float, output_rate: float) -> int:
     """
     Return ``M = round(f_in / f_out)`` if the ratio is an integer >= 1, else 0.
@@ -100,11 +122,7 @@ class WrenchResampler:
 
     def __init__(self, *, input_rate: float, output_rate: float,
                  at_completion: bool = False) -> None:
-        slack = 1.0 + INTEGER_TOLERANCE        # a measured 10 kHz may read 10010 Hz
-        if not (math.isfinite(input_rate)
-                and MIN_INPUT_RATE / slack <= input_rate <= MAX_INPUT_RATE * slack):
-            raise ConfigError(f'wrench rate {input_rate} Hz is outside [{MIN_INPUT_RATE:g}, '
-                              f'{MAX_INPUT_RATE:g}] Hz')
+        check_input_rate(rate=input_rate)
         if not (math.isfinite(output_rate) and output_rate > 0):
             raise ConfigError(f'feature rate ft_rate_hz={output_rate} Hz must be > 0')
         self.input_rate = float(input_rate)
