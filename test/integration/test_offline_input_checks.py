@@ -24,7 +24,7 @@ import json
 from pathlib import Path
 
 from contact_detector.cli import detect as detect_cli
-from contact_detector.detection.parameters import read_param_file
+from contact_detector.detection.parameters import PARAMS_BY_NAME, read_param_file
 from contact_detector.errors import ConfigError
 from contact_detector.sim.bag_writer import write_trial_bag
 from contact_detector.sim.trial import simulate_trial
@@ -66,6 +66,13 @@ def test_a_parameter_file_the_node_would_refuse_is_refused(tmp_path, text, match
     with pytest.raises(ConfigError, match=match) as err:
         read_param_file(params_file(tmp_path, text))
     assert 'params.yaml' in str(err.value)
+
+
+def test_the_shipped_parameter_files_pass_the_offline_checks():
+    # the files a user starts from set every parameter (the defaults) and the HSR preset
+    params = Path(__file__).resolve().parents[2] / 'params'
+    assert set(read_param_file(params / 'contact_detector.yaml')) == set(PARAMS_BY_NAME)
+    assert read_param_file(params / 'hsr.yaml')['wrench.rate'] == 100.0
 
 
 def test_an_undecodable_parameter_file_is_a_config_error(tmp_path):
