@@ -16,11 +16,11 @@
 
 import math
 from pathlib import Path
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Sequence
 
 from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import Truth
-from contact_detector.io.bags import MANIFEST_NAME, read_manifest
+from contact_detector.io.bags import manifest_entry, manifest_index, MANIFEST_NAME
 from contact_detector.io.sensor_stream import truth_onsets
 
 
@@ -40,40 +40,14 @@ def conditions_of(bags: Sequence[Path]) -> dict:
 
     """
     out = {}
-    index: Dict[Path, Dict[str, Tuple[int, dict]]] = {}
+    indexes: Dict[Path, dict] = {}
     for bag in bags:
-        if bag.parent not in index:
+        if bag.parent not in indexes:
             manifest = bag.parent / MANIFEST_NAME
-            index[bag.parent] = _entries_by_name(manifest=manifest) if manifest.is_file() else {}
-        names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
-        hits = [index[bag.parent][n] for n in names if n in index[bag.parent]]
-        if hits:
-            out[bag] = min(hits, key=lambda hit: hit[0])[1]
-    return out
-
-
-def _entries_by_name(*, manifest: Path) -> Dict[str, Tuple[int, dict]]:
-    """
-    Index a manifest's trial entries by their ``bag`` and their ``name``.
-
-    Parameters
-    ----------
-    manifest : Path
-        The ``manifest.json`` file.
-
-    Returns
-    -------
-    dict
-        Name -> the position and entry of the first trial with that ``bag`` or ``name``.
-        Entries with neither (or that are no JSON object) name no bag and are left out.
-
-    """
-    out: Dict[str, Tuple[int, dict]] = {}
-    for position, trial in enumerate(read_manifest(manifest)['trials']):
-        if isinstance(trial, dict):
-            for key in (trial.get('bag'), trial.get('name')):
-                if isinstance(key, str):
-                    out.setdefault(key, (position, trial))
+            indexes[bag.parent] = manifest_index(manifest) if manifest.is_file() else {}
+        entry = manifest_entry(bag, index=indexes[bag.parent])
+        if entry is not None:
+            out[bag] = entry
     return out
 
 

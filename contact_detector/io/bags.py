@@ -736,12 +736,54 @@ def read_manifest(path: str | Path) -> dict:
     return data
 
 
-def manifest_entry(bag: str | Path) -> dict | None:
-    """Return the entry of ``bag`` in the ``manifest.json`` beside it, or None."""
+def manifest_index(path: str | Path) -> dict[str, tuple[int, dict]]:
+    """
+    Index a manifest's trial entries by their ``bag`` and their ``name``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The directory holding ``manifest.json`` or the file itself.
+
+    Returns
+    -------
+    dict
+        Name -> the position and entry of the first trial with that ``bag`` or ``name``.
+        Entries with neither (or that are no JSON object) name no bag and are left out.
+
+    Raises
+    ------
+    BagError
+        As :func:`read_manifest`.
+
+    """
+    out: dict[str, tuple[int, dict]] = {}
+    for position, trial in enumerate(read_manifest(path)['trials']):
+        if isinstance(trial, dict):
+            for key in (trial.get('bag'), trial.get('name')):
+                if isinstance(key, str):
+                    out.setdefault(key, (position, trial))
+    return out
+
+
+def manifest_entry(bag: str | Path, *,
+                   index: dict[str, tuple[int, dict]] | None = None) -> dict | None:
+    """
+    Return the entry of ``bag`` in the ``manifest.json`` beside it, or None.
+
+    The entry is the first whose ``bag`` or ``name`` is the bag's name (or, for a ROS 1
+    ``.bag`` file, its stem). ``index`` is the folder's :func:`manifest_index`, for a caller
+    that looks up many bags of one folder; None reads the manifest.
+    """
     bag = Path(bag)
-    file = bag.parent / MANIFEST_NAME
-    if not file.is_file():
-        return None
+    if index is None:
+        file = bag.parent / MANIFEST_NAME
+        if not file.is_file():
+            return None
+        index = manifest_index(file)
+    names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
+    hits = [index[n] for n in names if n in index]
+    return min(hits, key=lambda hit: hit[0])[1] if hits else None
     names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
     for trial in read_manifest(file)['trials']:
         if trial.get('bag') in names or trial.get('name') in names:
