@@ -22,6 +22,7 @@ import and reads no clock: every call passes the stream times (and, optionally, 
 time the message was received, for the staleness check).
 """
 
+import dataclasses
 from dataclasses import dataclass, field
 import math
 from typing import Optional, Sequence, Union
@@ -74,6 +75,9 @@ class DetectorSettings:
         Largest accepted relative difference between the rate at which audio samples arrive
         (per second of stamps) and ``audio_rate``; beyond it every chunk is dropped (see
         :class:`AudioRateCheck`). None turns the check off.
+    wrench_bias : tuple of 6 float
+        The F/T sensor's zero, subtracted from every wrench sample: force x, y, z in N, then
+        torque x, y, z in N m (what the sensor reads with an empty hand).
 
     """
 
@@ -87,9 +91,15 @@ class DetectorSettings:
     armed_on_start: bool = True
     rule: Optional[DecisionRule] = None
     audio_rate_tolerance: Optional[float] = 0.2
+    wrench_bias: tuple = (0.0,) * 6
 
     def __post_init__(self) -> None:
         """Validate ranges; raise ConfigError naming the field."""
+        bias = self.wrench_bias
+        if not (isinstance(bias, tuple) and len(bias) == 6
+                and all(isinstance(b, (int, float)) and not isinstance(b, bool)
+                        and math.isfinite(b) for b in bias)):
+            raise ConfigError(f'wrench_bias must be a tuple of 6 finite numbers, got {bias!r}')
         tol = self.audio_rate_tolerance
         if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol)
                                     and 0 < tol < 1):
@@ -259,6 +269,7 @@ class ContactDetector:
                 max_ft_wait_s=settings.max_ft_wait_s)
         except InputError as err:
             raise ConfigError(f'cannot build the detector: {err}') from err
+        self.extractor.ft.set_bias(settings.wrench_bias)    # checked by the settings
         self.logic = ReleaseLogic(rule=self.rule, armed=settings.armed_on_start)
         self.rate_check = (None if settings.audio_rate_tolerance is None else AudioRateCheck(
             rate=settings.audio_rate, tolerance=settings.audio_rate_tolerance))
@@ -311,6 +322,48 @@ class ContactDetector:
     def armed(self) -> bool:
         """Whether the next contact event releases."""
         return self.logic.armed
+
+    @property
+    def bias(self) -> tuple:
+        """Return the F/T sensor's zero subtracted from every sample: 6 floats, N then N m."""
+        return tuple(self.extractor.ft.bias.tolist())
+
+    def set_bias(self, bias: Sequence[float]) -> None:
+        """
+        Subtract ``bias`` from every later wrench sample; forget the stream state if it changed.
+
+        A new zero is a step in every F/T sample: the windows, the carried load and the
+        confirmation run start again (:meth:`reset`: warm-up, no release from the step); the
+        arming is kept.
+
+        Raises
+        ------
+        ConfigError
+            Not 6 finite numbers.
+
+        """
+        old = self.extractor.ft.bias
+        try:
+            self.extractor.ft.set_bias(bias)
+        except InputError as err:
+            raise ConfigError(str(err)) from err
+        if not np.array_equal(old, self.extractor.ft.bias):
+            self.settings = dataclasses.replace(self.settings, wrench_bias=self.bias)
+            self.reset()
+
+    def measure_zero(self) -> None:
+        """
+        Measure the sensor's reading over the next ``carried_window`` F/T samples (an empty hand).
+
+        The result is :attr:`zero_measurement`; the caller adds its load to :attr:`bias`
+        (:meth:`set_bias`) if it is steady. Nothing else changes meanwhile.
+        """
+        self.extractor.ft.measure_zero()
+
+    @property
+    def zero_measurement(self) -> Optional[CarriedLoad]:
+        """Return the last completed zero measurement (a new object each), or None."""
+        return self.extractor.ft.zero_measurement
 
     def set_rule(self, rule: DecisionRule) -> None:
         """

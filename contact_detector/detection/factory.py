@@ -49,6 +49,7 @@ def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
         'max_ft_wait_s': float(params.get('max_ft_wait_s', 0.25)),
         'warmup_s': float(params.get('warmup_s', 0.5)),
         'corrupt_holdoff_s': float(params.get('corrupt_holdoff_s', 0.2)),
+        'wrench_bias': tuple(params.get('wrench.bias', (0.0,) * 6)),
     }
     age = params.get('max_ft_age_s', 0.0)
     if age and age > 0:

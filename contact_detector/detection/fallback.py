@@ -142,6 +142,28 @@ class AudioFallback:
             self.primary.measure_carried()
             self.fallback.measure_carried()
 
+    @property
+    def bias(self) -> tuple:
+        """Return the F/T sensor's zero both detectors subtract (:attr:`ContactDetector.bias`)."""
+        return self.primary.bias
+
+    def set_bias(self, bias: Sequence[float]) -> None:
+        """Give both detectors a new F/T zero; if it changed, :meth:`reset` (ConfigError)."""
+        before = self.bias
+        self.primary.set_bias(bias)
+        self.fallback.set_bias(bias)
+        if self.bias != before:
+            self.reset()
+
+    def measure_zero(self) -> None:
+        """Measure the sensor's zero in the multimodal detector (both see the same samples)."""
+        self.primary.measure_zero()
+
+    @property
+    def zero_measurement(self) -> Optional[CarriedLoad]:
+        """Return the multimodal detector's last zero measurement, or None."""
+        return self.primary.zero_measurement
+
     def reset(self) -> None:
         """Forget all stream state of both detectors; back to the multimodal model."""
         armed = self.armed

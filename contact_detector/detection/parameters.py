@@ -22,6 +22,7 @@ the descriptors); the offline tools read the same names from a parameter file
 refuses at start-up is refused offline with the same message.
 """
 
+import array
 import dataclasses
 from dataclasses import dataclass
 import fnmatch
@@ -50,12 +51,13 @@ class ParamSpec:
     ----------
     name : str
         Dotted parameter name (``audio.sample_rate``).
-    default : bool, int, float or str
-        Default value; its type is the parameter's type.
+    default : bool, int, float, str or tuple of float
+        Default value; its type is the parameter's type (a tuple: a double array of that
+        length).
     description : str
         Shown by ``ros2 param describe``.
     low, high : float or None
-        Inclusive range for numbers.
+        Inclusive range for numbers (each element of an array).
     read_only : bool
         Refuse changes after start-up.
     choices : tuple of str
@@ -103,6 +105,11 @@ PARAMS: Sequence[ParamSpec] = (
               'feature rate of the model (block means for integer multiples). The node '
               'measures the real rate and warns when it differs by more than 10 %.',
               1.0, 100000.0),
+    ParamSpec('wrench.bias', (0.0,) * 6, "The F/T sensor's zero, subtracted from every "
+              'wrench sample: [fx, fy, fz] N then [tx, ty, tz] N m, what the sensor reads with '
+              'an empty hand. ~/zero_sensor measures and sets it; a change restarts the stream '
+              'state (warm-up). Zero the sensor with the empty hand, never while it holds the '
+              'object.', -10000.0, 10000.0, read_only=False),
     ParamSpec('wrench.stamp_source', 'header', "Time of a wrench sample: 'header' = its stamp, "
               "'receive' = the node clock on arrival.", choices=STAMP_SOURCES),
     ParamSpec('qos.reliability', 'best_effort', 'Reliability of the input subscriptions '
@@ -228,6 +235,7 @@ class NodeConfig:
     audio_max_chunk_s: float
     audio_wait_for_info: bool
     wrench_rate: float
+    wrench_bias: tuple
     wrench_stamp_source: str
     qos_reliability: str
     qos_depth: int
@@ -260,6 +268,8 @@ def check_value(name: str, value: Any) -> Any:
     spec = PARAMS_BY_NAME.get(name)
     if spec is None:
         raise ConfigError(f'unknown parameter {name!r}')
+    if isinstance(spec.default, tuple):
+        return _check_array(spec, value)
     want = type(spec.default)
     # Floating-point parameters take integers too (dynamically typed, see ParamSpec).
     if want is float and isinstance(value, int) and not isinstance(value, bool):
@@ -273,6 +283,22 @@ def check_value(name: str, value: Any) -> Any:
     if spec.choices and value not in spec.choices:
         raise ConfigError(f'parameter {name}={value!r} must be one of {list(spec.choices)}')
     return value
+
+
+def _check_array(spec: ParamSpec, value: Any) -> tuple:
+    """Check a double-array value (list, tuple, rclpy's array); return a tuple of floats."""
+    size = len(spec.default)
+    if not isinstance(value, (list, tuple, array.array)) or len(value) != size \
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise ConfigError(f'parameter {spec.name} must be a list of {size} numbers, '
+                          f'got {value!r}')
+    out = tuple(float(v) for v in value)
+    if not all(map(math.isfinite, out)):
+        raise ConfigError(f'parameter {spec.name} must be finite, got {list(out)!r}')
+    if spec.low is not None and not all(spec.low <= v <= spec.high for v in out):
+        raise ConfigError(f'parameter {spec.name}={list(out)!r} has a value outside '
+                          f'[{spec.low}, {spec.high}]')
+    return out
 
 
 def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
@@ -313,6 +339,7 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         audio_channel=None if channel < 0 else channel,
         audio_stamp_source=v['audio.stamp_source'], audio_max_chunk_s=v['audio.max_chunk_s'],
         audio_wait_for_info=v['audio.wait_for_info'], wrench_rate=v['wrench.rate'],
+        wrench_bias=v['wrench.bias'],
         wrench_stamp_source=v['wrench.stamp_source'], qos_reliability=v['qos.reliability'],
         qos_depth=v['qos.depth'], max_input_delay_s=v['max_input_delay_s'],
         max_ft_age_s=v['max_ft_age_s'] or None, max_ft_wait_s=v['max_ft_wait_s'],

@@ -71,6 +71,14 @@ class ForceTorqueStream:
         A stamp earlier than the previous one by more than this raises :class:`TimeJumpError`;
         by less (a duplicate or reordered message) raises :class:`InputError`.
 
+    Notes
+    -----
+    Every sample is read as ``x - bias`` (:attr:`bias`, shape (6,), N and N m: the sensor's
+    zero, :meth:`set_bias`) before anything else. :meth:`measure_zero` measures what that
+    corrected signal reads over the next ``carried_window`` samples at the feature rate (the
+    carried-load measurement, :func:`measure_carried_load`, of an empty hand); the caller
+    decides whether to add it to the bias.
+
     """
 
     def __init__(self, *, config: FeatureConfig, input_rate: float,
@@ -135,8 +143,56 @@ class ForceTorqueStream:
         # reset or measure_carried(); kept across the window restarts of a wrench gap
         self._carried_rows = TailBuffer(capacity=config.carried_window, width=6)
         self._floor = np.array([config.carried_floor_force, config.carried_floor_torque])
+        # the sensor's zero (set_bias) and its measurement (measure_zero), kept across resets:
+        # the sensor does not change when the stream state is forgotten
+        self.bias = np.zeros(6)
+        self._biased = False
+        self._zero_rows = TailBuffer(capacity=config.carried_window, width=6)
+        self._zeroing = False
+        #: The last completed zero measurement (what the corrected signal read), or None.
+        self.zero_measurement: Optional[CarriedLoad] = None
         self.restarts = 0
         self.reset()
+
+    def set_bias(self, bias: Sequence[float]) -> None:
+        """
+        Read every later sample as ``x - bias``; the caller resets the stream state.
+
+        Parameters
+        ----------
+        bias : sequence of 6 float
+            Force x, y, z in N, then torque x, y, z in N m, finite.
+
+        Raises
+        ------
+        InputError
+            Not 6 finite numbers.
+
+        """
+        try:
+            value = np.array([float(b) for b in bias], dtype=np.float64)
+        except (TypeError, ValueError, OverflowError) as err:
+            raise InputError(f'the F/T bias must be 6 numbers, got {bias!r}') from err
+        if value.shape != (6,) or not np.all(np.isfinite(value)):
+            raise InputError(f'the F/T bias must be 6 finite numbers, got {bias!r}')
+        self.bias = value
+        self._biased = bool(np.any(value != 0.0))
+
+    def measure_zero(self) -> None:
+        """
+        Measure what the corrected signal reads over the next ``carried_window`` samples.
+
+        The result, :attr:`zero_measurement` (a new object), is the carried-load measurement
+        of those samples at the feature rate: their per-axis median and how far it moved. With
+        an empty hand held still it is what :meth:`set_bias` should add to the bias.
+        """
+        self._zero_rows.clear()
+        self._zeroing = True
+
+    @property
+    def measuring_zero(self) -> bool:
+        """Whether a zero measurement (:meth:`measure_zero`) is under way."""
+        return self._zeroing
 
     def reset(self) -> None:
         """Forget everything, including the last stamp seen and the carried load."""
@@ -210,6 +266,8 @@ class ForceTorqueStream:
         """
         self.check_stamps(t)
         values = np.concatenate([force, torque], axis=1)
+        if self._biased:
+            values = values - self.bias
         if t.size == 1:
             # One sample (a live wrench message): the split below without its array calls.
             if self.last_input_t is not None \
@@ -323,6 +381,15 @@ class ForceTorqueStream:
             self._carried_from = self._n_dec + missing - 1
             self._measuring = False
 
+    def _measure_zero(self, dec_v: np.ndarray) -> None:
+        # Feed the zero measurement (measure_zero) with the corrected samples.
+        missing = self.config.carried_window - self._zero_rows.view.shape[0]
+        self._zero_rows.extend(dec_v[:missing])
+        if dec_v.shape[0] >= missing:
+            self.zero_measurement = measure_carried_load(rows=self._zero_rows.view,
+                                                         floor=self._floor)
+            self._zeroing = False
+
     @property
     def carried(self) -> Optional[np.ndarray]:
         """Return the carried load, shape (6,) (N, N m): :attr:`carried_load`'s, or None."""
@@ -348,6 +415,8 @@ class ForceTorqueStream:
             return np.zeros(0), np.zeros((0, len(self.columns)))
         if self._measuring:
             self._measure(dec_v)
+        if self._zeroing:
+            self._measure_zero(dec_v)
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)

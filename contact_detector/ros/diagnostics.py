@@ -125,6 +125,8 @@ class DiagnosticsMixin:
                            'carried_force_n': f'{carried.force_n:.3f}',
                            'carried_torque_nm': f'{carried.torque_nm:.4f}',
                            'carried_moved_n': f'{carried.moved[0]:.3f}'})
+        # the sensor's zero (wrench.bias, ~/zero_sensor): N, N, N, N m, N m, N m
+        values['wrench_bias'] = ' '.join(f'{b:g}' for b in det.bias)
         values.update({name: str(value) for name, value in sorted(counts.items())})
         values['audio_received'] = str(self.audio.received)
         values['wrench_received'] = str(self.wrench.received)

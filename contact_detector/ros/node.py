@@ -35,6 +35,7 @@ Interface (all names relative, remappable)::
                 gripper.topic        trajectory_msgs/msg/JointTrajectory (gripper.enabled)
     services    ~/arm                std_srvs/srv/SetBool
                 ~/reset              std_srvs/srv/Trigger
+                ~/zero_sensor        std_srvs/srv/Trigger   (sets wrench.bias)
 
 The wiring (:class:`DetectorWiring`) is shared with the managed (lifecycle) variant,
 :mod:`contact_detector.ros.lifecycle_node`. See ``docs/node.md``. Next to it: parameters in
@@ -83,6 +84,7 @@ from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile,
                        ReliabilityPolicy)
 from rclpy.serialization import deserialize_message
@@ -232,6 +234,7 @@ class DetectorWiring(DiagnosticsMixin):
                                              armed=cfg.release_armed_on_start)
         self._time_jumps_seen = 0
         self._carried_seen = None           # the last carried-load measurement logged
+        self._zero_seen = None              # the last zero measurement applied
         self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
                          'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
@@ -261,6 +264,7 @@ class DetectorWiring(DiagnosticsMixin):
         self.diagnostics_pub = make_publisher(DiagnosticArray, '/diagnostics', 10)
         self.arm_srv = self.create_service(SetBool, '~/arm', self._on_arm)
         self.reset_srv = self.create_service(Trigger, '~/reset', self._on_reset)
+        self.zero_srv = self.create_service(Trigger, '~/zero_sensor', self._on_zero)
 
     def _destroy_outputs(self, destroy_publisher: Callable[[Any], Any]) -> None:
         """Destroy what :meth:`_create_outputs` made."""
@@ -270,6 +274,7 @@ class DetectorWiring(DiagnosticsMixin):
                 destroy_publisher(pub)
         self.destroy_service(self.arm_srv)
         self.destroy_service(self.reset_srv)
+        self.destroy_service(self.zero_srv)
 
     def _create_inputs(self) -> None:
         """Subscribe to the inputs; start the diagnostics timer and the clock-jump callback."""
@@ -328,7 +333,7 @@ class DetectorWiring(DiagnosticsMixin):
             audio_rate=rate, wrench_rate=cfg.wrench_rate, max_ft_age_s=cfg.max_ft_age_s,
             max_ft_wait_s=cfg.max_ft_wait_s, max_input_delay_s=cfg.max_input_delay_s,
             warmup_s=cfg.warmup_s, corrupt_holdoff_s=cfg.corrupt_holdoff_s, armed_on_start=armed,
-            rule=cfg.rule((bundle or self.bundle).decision_rule))
+            rule=cfg.rule((bundle or self.bundle).decision_rule), wrench_bias=cfg.wrench_bias)
 
     def _build_detector(self, *, rate: float, armed: bool):
         try:
@@ -551,6 +556,11 @@ class DetectorWiring(DiagnosticsMixin):
             self._carried_seen = carried
             if carried is not None:
                 self._log_carried(carried)
+        zero = self.detector.zero_measurement
+        if zero is not self._zero_seen:
+            self._zero_seen = zero
+            if zero is not None:
+                self._apply_zero(zero)
         switches = getattr(self.detector, 'switch_messages', None)
         if switches:
             for line in switches:
@@ -582,6 +592,27 @@ class DetectorWiring(DiagnosticsMixin):
             self.get_logger().warning(carried.describe() + ': arm again (~/arm) while the '
                                       'hand holds the object still')
 
+    def _apply_zero(self, zero: CarriedLoad) -> None:
+        # A completed ~/zero_sensor measurement: what the corrected signal read with the empty
+        # hand is added to wrench.bias, through the parameter (so `ros2 param get` and a
+        # parameter dump show it, and one code path applies every bias).
+        if not zero.steady:
+            self.get_logger().warning(
+                f'F/T zero not changed: the F/T moved by {zero.moved[0]:.2f} N / '
+                f'{zero.moved[1]:.3f} N m over the {zero.samples} samples measured; call '
+                '~/zero_sensor again with the hand empty and still')
+            return
+        bias = [round(b + z, 6) for b, z in zip(self.detector.bias, zero.load.tolist())]
+        result = self.set_parameters([Parameter('wrench.bias', Parameter.Type.DOUBLE_ARRAY,
+                                                bias)])[0]
+        if not result.successful:
+            self.get_logger().warning(f'F/T zero not changed: {result.reason}')
+            return
+        self.get_logger().info(
+            f'F/T sensor zeroed over {zero.samples} samples (it read |F| {zero.force_n:.2f} N, '
+            f'|T| {zero.torque_nm:.3f} N m); stream state reset, warming up again. To keep '
+            f'it after a restart: wrench.bias: [{", ".join(f"{b:g}" for b in bias)}]')
+
     def _release(self, t: float) -> None:
         self.release_pub.publish(Bool(data=True))
         self.counts['release_msgs'] += 1
@@ -612,6 +643,20 @@ class DetectorWiring(DiagnosticsMixin):
             response.success = True
             response.message = ('stream state reset, warming up again; release '
                                 f'{"armed" if self.detector.armed else "disarmed"}')
+            self.get_logger().info(response.message)
+        except Exception as err:  # a callback must never raise
+            response.success, response.message = False, f'{type(err).__name__}: {err}'
+        return response
+
+    def _on_zero(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        try:
+            self.detector.measure_zero()
+            config = self.bundle.feature_config
+            n = config.carried_window
+            response.success = True
+            response.message = (f'measuring the F/T zero over the next {n} F/T samples '
+                                f'({n / config.ft_rate_hz:.2f} s): keep the hand empty and '
+                                'still')
             self.get_logger().info(response.message)
         except Exception as err:  # a callback must never raise
             response.success, response.message = False, f'{type(err).__name__}: {err}'
@@ -664,6 +709,8 @@ class DetectorWiring(DiagnosticsMixin):
                 or self.bundle is None:         # configure reads the parameters
             return
         old, self.config = self.config, new
+        if new.wrench_bias != old.wrench_bias:
+            self.detector.set_bias(new.wrench_bias)     # checked: no ConfigError
         for det, bundle in self._rule_targets():
             det.settings = replace(det.settings, max_input_delay_s=new.max_input_delay_s,
                                    warmup_s=new.warmup_s,

@@ -44,7 +44,8 @@ def descriptor(spec: ParamSpec) -> ParameterDescriptor:
     Floating-point parameters are dynamically typed, so that an integer (``-p
     audio.sample_rate:=16000``, ``sample_rate: 16000`` in a params file) is accepted;
     :func:`config_from_values` converts it to a float and refuses any other type, and
-    checks the range for both (rclpy checks ``floating_point_range`` for floats only).
+    checks the range for both (rclpy checks ``floating_point_range`` for floats only). So are
+    double arrays (``wrench.bias: [0, 0, 0, 0, 0, 0]``), whose elements it checks.
 
     Parameters
     ----------
@@ -56,8 +57,9 @@ def descriptor(spec: ParamSpec) -> ParameterDescriptor:
     ParameterDescriptor
 
     """
+    # an array too: [0, 0, 0, 0, 0, 0] in a params file is an integer array
     desc = ParameterDescriptor(description=spec.description, read_only=spec.read_only,
-                               dynamic_typing=isinstance(spec.default, float))
+                               dynamic_typing=isinstance(spec.default, (float, tuple)))
     if spec.choices:
         desc.additional_constraints = 'one of: ' + ', '.join(spec.choices)
     if spec.low is not None and isinstance(spec.default, float):
@@ -97,7 +99,8 @@ def declare_all(node: Node) -> None:
     """
     for spec in PARAMS:
         try:
-            node.declare_parameter(spec.name, spec.default, descriptor(spec))
+            default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+            node.declare_parameter(spec.name, default, descriptor(spec))
         except ParameterException as err:
             raise ConfigError(f'parameter {spec.name}: {err}') from err
 

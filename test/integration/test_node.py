@@ -316,6 +316,8 @@ def test_lazy_wrench_is_taken_with_the_next_audio(harness_factory, model, trial)
     ({'qos.reliability': 'sometimes'}, 'qos.reliability'),
     ({'release.threshold': 1.5}, 'release.threshold'),
     ({'wrench.rate': 20000.0}, 'outside'),
+    ({'wrench.bias': [1.0, 2.0, 3.0]}, 'wrench.bias must be a list of 6 numbers'),
+    ({'wrench.bias': [0.0] * 5 + [1e9]}, 'wrench.bias.*outside'),
 ])
 def test_invalid_parameters_refused_at_start(context, model, params, match):
     overrides = [Parameter('model.path', value=str(model))]
@@ -338,8 +340,11 @@ def test_params_file_documents_every_parameter(model):
     values = dict(flat(tree))
     assert list(values) == [spec.name for spec in PARAMS]
     for spec in PARAMS:
-        assert type(values[spec.name]) is type(spec.default), spec.name
-        assert values[spec.name] == spec.default, spec.name
+        value = values[spec.name]
+        if isinstance(spec.default, tuple):         # an array: a YAML list
+            value = tuple(value) if isinstance(value, list) else value
+        assert type(value) is type(spec.default), spec.name
+        assert value == spec.default, spec.name
     # rclpy reads the file: the node starts with it (model path overridden after it).
     ctx = Context()
     rclpy.init(context=ctx, args=['--ros-args', '--params-file', str(path),
@@ -415,6 +420,11 @@ def test_parameters_at_run_time(harness_factory):
     assert set_('release.load_threshold', 0.0).successful
     assert set_('release.load2_threshold', 0.0).successful
     assert not node.detector.rule.uses_load
+    # the sensor's zero: an integer array is taken, a wrong length refused
+    assert not set_('wrench.bias', [1.0, 2.0]).successful
+    assert node.detector.bias == (0.0,) * 6
+    assert set_('wrench.bias', [1, 0, -2, 0, 0, 3]).successful
+    assert node.detector.bias == (1.0, 0.0, -2.0, 0.0, 0.0, 3.0)
 
 
 def test_the_load_path_needs_a_model_that_measures_the_carried_load(context, tmp_path):
@@ -510,6 +520,46 @@ def test_carried_load_is_logged_and_a_load_that_moved_is_reported(harness_factor
     assert h.call(h.arm, SetBool.Request(data=False)).success
     status, values = diag_values_of(h.node.diagnostics())
     assert status.level == DiagnosticStatus.OK
+
+
+def test_zero_sensor_sets_the_bias_from_what_the_hand_reads(harness_factory, trial):
+    """~/zero_sensor: the next 50 samples' median becomes wrench.bias; a moving hand: WARN."""
+    h = harness_factory(**{'release.armed_on_start': False})
+    logged = {'info': [], 'warning': []}
+    logger = h.node.get_logger()
+    info, warning = logger.info, logger.warning
+    logger.info = lambda text, *a, **k: (logged['info'].append(text), info(text, *a, **k))
+    logger.warning = lambda text, *a, **k: (logged['warning'].append(text),
+                                            warning(text, *a, **k))
+    zero = h.io.create_client(Trigger, 'contact_detector/zero_sensor')
+    t0 = trial.start_time
+    h.feed(trial, node_support.trial_events(trial, t_to=t0 + 0.8))
+    reply = h.call(zero, Trigger.Request())
+    assert reply.success and 'over the next 50 F/T samples (0.50 s)' in reply.message
+    h.feed(trial, node_support.trial_events(trial, t_from=t0 + 0.8, t_to=t0 + 1.6))
+    # what the sensor read over the 50 samples after the call (100 Hz: the feature rate)
+    after = np.flatnonzero(trial.wrench_t >= t0 + 0.8)[:50]
+    read = np.median(np.hstack([trial.force[after], trial.torque[after]]), axis=0)
+    bias = h.node.get_parameter('wrench.bias').value
+    assert list(bias) == pytest.approx(read, abs=1e-5)
+    assert h.node.detector.bias == pytest.approx(read, abs=1e-5)
+    zeroed = [line for line in logged['info'] if line.startswith('F/T sensor zeroed')]
+    assert len(zeroed) == 1 and 'wrench.bias: [' in zeroed[0]
+    status, values = diag_values_of(h.node.diagnostics())
+    assert [float(v) for v in values['wrench_bias'].split()] == pytest.approx(read, abs=1e-4)
+    # the carried load is measured again in the new zero: about nothing
+    h.feed(trial, node_support.trial_events(trial, t_from=t0 + 1.6, t_to=t0 + 2.4))
+    assert h.node.detector.carried_load.force_n < 0.5
+    # a hand that moves while it is zeroed: nothing changes, and the log says so
+    assert h.call(zero, Trigger.Request()).success
+    moving = trial.force.copy()
+    moving[trial.wrench_t >= t0 + 2.65, 2] -= 3.0
+    h.feed(replace(trial, force=moving),
+           node_support.trial_events(trial, t_from=t0 + 2.4, t_to=t0 + 3.2))
+    refused = [line for line in logged['warning'] if line.startswith('F/T zero not changed')]
+    assert len(refused) == 1 and 'moved by 3.0' in refused[0] and '~/zero_sensor' in refused[0]
+    assert list(h.node.get_parameter('wrench.bias').value) == list(bias)
+    assert h.node.detector_counts()['releases'] == 0
 
 
 def diag_values_of(array):
