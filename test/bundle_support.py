@@ -51,3 +51,22 @@ def lasting_change_bundle(*, config: FeatureConfig, n: int, created: str) -> Mod
     x[:, lasting] = rng.uniform(0, 3, size=n)
     y = (x[:, lasting] > 1.0).astype(int)
     return toy_bundle(config=config, x=x, y=y, created=created)
+
+
+def unloading_bundle(*, config: FeatureConfig, created: str) -> ModelBundle:
+    """
+    Return a :func:`toy_bundle` that says contact when a lasting change unloads the hand.
+
+    4000 random frames: ``force_shift_min`` uniform in [0, 3] N, ``force_carried_cos`` in
+    [-1, 1], the rest ``|N(0, 1)|``; contact when ``force_shift_min > 1`` N and
+    ``force_carried_cos < -0.5``. The table taking weight off releases; a push across the
+    carried load does not, nor does any change on a sensor whose carried load is wrong.
+    """
+    rng = np.random.default_rng(0)
+    x = np.abs(rng.normal(size=(4000, config.n_features)))
+    lasting = config.feature_names.index('force_shift_min')
+    cos = config.feature_names.index('force_carried_cos')
+    x[:, lasting] = rng.uniform(0, 3, size=4000)
+    x[:, cos] = rng.uniform(-1, 1, size=4000)
+    y = ((x[:, lasting] > 1.0) & (x[:, cos] < -0.5)).astype(int)
+    return toy_bundle(config=config, x=x, y=y, created=created)

@@ -211,6 +211,18 @@ def offline_run(model, trial, fed, **settings):
     return np.array(p), np.array(contact, dtype=bool), releases
 
 
+def capture_log(node) -> dict:
+    """Return {'info': [...], 'warning': [...]}, filled with the node's log lines from now on."""
+    logged = {'info': [], 'warning': []}
+    logger = node.get_logger()
+    # one wrapper per severity: rclpy refuses two severities from one call site
+    info, warning = logger.info, logger.warning
+    logger.info = lambda text, *a, **k: (logged['info'].append(text), info(text, *a, **k))
+    logger.warning = lambda text, *a, **k: (logged['warning'].append(text),
+                                            warning(text, *a, **k))
+    return logged
+
+
 def diag_values(harness):
     status = harness.diag[-1].status[0]
     return status, {kv.key: kv.value for kv in status.values}
@@ -487,13 +499,7 @@ def test_wrench_at_another_rate_than_configured_is_reported(harness_factory, tri
 def test_carried_load_is_logged_and_a_load_that_moved_is_reported(harness_factory, trial):
     """The carried load of each measurement in one log line; armed while it moved: WARN."""
     h = harness_factory(**{'release.armed_on_start': False})
-    logged = {'info': [], 'warning': []}
-    logger = h.node.get_logger()
-    # one wrapper per severity: rclpy refuses two severities from one call site
-    info, warning = logger.info, logger.warning
-    logger.info = lambda text, *a, **k: (logged['info'].append(text), info(text, *a, **k))
-    logger.warning = lambda text, *a, **k: (logged['warning'].append(text),
-                                            warning(text, *a, **k))
+    logged = capture_log(h.node)
     t0 = trial.start_time
     # the start's measurement: the hand holds the object still
     h.feed(trial, node_support.trial_events(trial, t_to=t0 + 1.0))
@@ -525,12 +531,7 @@ def test_carried_load_is_logged_and_a_load_that_moved_is_reported(harness_factor
 def test_zero_sensor_sets_the_bias_from_what_the_hand_reads(harness_factory, trial):
     """~/zero_sensor: the next 50 samples' median becomes wrench.bias; a moving hand: WARN."""
     h = harness_factory(**{'release.armed_on_start': False})
-    logged = {'info': [], 'warning': []}
-    logger = h.node.get_logger()
-    info, warning = logger.info, logger.warning
-    logger.info = lambda text, *a, **k: (logged['info'].append(text), info(text, *a, **k))
-    logger.warning = lambda text, *a, **k: (logged['warning'].append(text),
-                                            warning(text, *a, **k))
+    logged = capture_log(h.node)
     zero = h.io.create_client(Trigger, 'contact_detector/zero_sensor')
     t0 = trial.start_time
     h.feed(trial, node_support.trial_events(trial, t_to=t0 + 0.8))

@@ -25,7 +25,7 @@ new zero restarts the stream state instead of passing a step to the features.
 
 from dataclasses import replace
 
-from bundle_support import toy_bundle
+from bundle_support import unloading_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.factory import build_detector_factory
 from contact_detector.detection.fallback import AudioFallback
@@ -53,14 +53,7 @@ def bundle() -> ModelBundle:
 
 
 def _bundle(config: FeatureConfig) -> ModelBundle:
-    rng = np.random.default_rng(0)
-    x = np.abs(rng.normal(size=(4000, config.n_features)))
-    lasting = config.feature_names.index('force_shift_min')
-    cos = config.feature_names.index('force_carried_cos')
-    x[:, lasting] = rng.uniform(0, 3, size=4000)
-    x[:, cos] = rng.uniform(-1, 1, size=4000)
-    y = ((x[:, lasting] > 1.0) & (x[:, cos] < -0.5)).astype(int)
-    return toy_bundle(config=config, x=x, y=y, created='2026-11-29T00:00:00+00:00')
+    return unloading_bundle(config=config, created='2026-11-29T00:00:00+00:00')
 
 
 def _events(*, offset=(0.0,) * 6, seed: int = 1) -> list:
