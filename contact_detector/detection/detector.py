@@ -242,7 +242,7 @@ class ContactDetector:
     COUNTERS = ('audio_msgs', 'wrench_msgs', 'audio_dropped', 'wrench_dropped', 'time_jumps',
                 'frames', 'invalid_frames', 'stale_frames', 'events', 'releases',
                 'audio_restarts', 'wrench_restarts', 'audio_rate_mismatch', 'nonfinite_frames',
-                'audio_clipped', 'audio_ignored')
+                'audio_clipped', 'audio_ignored', 'wrench_placeholders')
 
     def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
         self.bundle = bundle
@@ -536,6 +536,7 @@ class ContactDetector:
         n = len(frames)
         self.counts['audio_restarts'] = self.extractor.audio.restarts
         self.counts['wrench_restarts'] = self.extractor.ft.restarts
+        self.counts['wrench_placeholders'] = self.extractor.ft.placeholders
         if n == 0:
             return Decisions.empty()
         if n == 1 and not isinstance(now, np.ndarray):

@@ -73,7 +73,8 @@ class Run:
         -------
         str or None
             One line for the tools to print; None when at least half of the frames were
-            decided and no frame was stale, non-finite or after a time jump.
+            decided, no frame was stale, non-finite or after a time jump, and no F/T sample
+            was left out as a driver's placeholder (six exact zeros after a load).
 
         """
         c = self.counts
@@ -82,10 +83,13 @@ class Run:
         found = [f'{c[k]} {what}' for k, what in (
             ('stale_frames', 'stale'), ('nonfinite_frames', 'non-finite'),
             ('time_jumps', 'time jumps')) if c.get(k)]
+        placeholders = c.get('wrench_placeholders', 0)
+        note = (f'{placeholders} F/T samples of six exact zeros after a load were left out '
+                "(a driver's placeholder for a missing reading)" if placeholders else None)
         if frames == 0:
-            return f'no frame from {msgs} messages' if msgs else None
+            return f'no frame from {msgs} messages' if msgs else note
         if invalid * 2 <= frames and not found:
-            return None
+            return note
         text = f'{invalid} of {frames} frames could not be decided (p 0)'
         if found:
             text += ': ' + ', '.join(found)
@@ -93,7 +97,7 @@ class Run:
             text += ('; most frames found no F/T sample near their time: are the wrench '
                      'stamps and the audio times on one clock? A miss here says nothing '
                      'about the detector')
-        return text
+        return text if note is None else f'{text}; {note}'
 
 
 def run_detector(events: Iterable[Event], *, detector: ContactDetector,

@@ -73,6 +73,13 @@ class ForceTorqueStream:
 
     Notes
     -----
+    A sample whose six values are all exactly 0 after a sample with a load (|F| or |T| at or
+    above the carried-load floors) is not a reading: drivers publish such placeholders when a
+    reading is missing, and the jump to nothing and back looks like a contact. It is left out
+    and counted in :attr:`placeholders` (nothing else changes: a gap of a few samples is
+    interpolated over, a longer one restarts the window). Exact zeros among readings near
+    zero (a sensor zeroed while idle, quantised) are readings and kept.
+
     Every sample is read as ``x - bias`` (:attr:`bias`, shape (6,), N and N m: the sensor's
     zero, :meth:`set_bias`) before anything else. :meth:`measure_zero` measures what that
     corrected signal reads over the next ``carried_window`` samples at the feature rate (the
@@ -151,6 +158,9 @@ class ForceTorqueStream:
         self._zeroing = False
         #: The last completed zero measurement (what the corrected signal read), or None.
         self.zero_measurement: Optional[CarriedLoad] = None
+        #: Samples left out as a driver's placeholder (six exact zeros after a load).
+        self.placeholders = 0
+        self._last_reading: Optional[np.ndarray] = None     # the newest non-zero raw sample
         self.restarts = 0
         self.reset()
 
@@ -266,6 +276,14 @@ class ForceTorqueStream:
         """
         self.check_stamps(t)
         values = np.concatenate([force, torque], axis=1)
+        if not (values.any() if values.shape[0] == 1 else np.all(values.any(axis=1))):
+            keep = ~self._placeholder_rows(values)
+            if not keep.all():
+                t, values = t[keep], values[keep]
+                if t.size == 0:
+                    return np.zeros(0), np.zeros((0, len(self.columns)))
+        elif values.shape[0]:
+            self._last_reading = values[-1]         # whether it has a load: when needed
         if self._biased:
             values = values - self.bias
         if t.size == 1:
@@ -380,6 +398,26 @@ class ForceTorqueStream:
                                                      floor=self._floor)
             self._carried_from = self._n_dec + missing - 1
             self._measuring = False
+
+    def _loaded(self, values: np.ndarray) -> np.ndarray:
+        # (n,) whether each raw (n, 6) sample has |F| or |T| at or above the floors
+        return (np.linalg.norm(values[:, :3], axis=1) >= self._floor[0]) \
+            | (np.linalg.norm(values[:, 3:], axis=1) >= self._floor[1])
+
+    def _placeholder_rows(self, values: np.ndarray) -> np.ndarray:
+        # (n,) rows of six exact zeros whose newest non-zero predecessor (in this call or an
+        # earlier one) had a load; counts them and keeps the newest non-zero row
+        zero = ~values.any(axis=1)
+        index = np.where(zero, -1, np.arange(zero.size))
+        newest = np.maximum.accumulate(index)           # newest non-zero row at or before
+        earlier = (self._last_reading is not None
+                   and bool(self._loaded(self._last_reading[None])[0]))
+        before = np.where(newest >= 0, self._loaded(values)[np.maximum(newest, 0)], earlier)
+        drop = zero & before
+        if newest[-1] >= 0:
+            self._last_reading = values[newest[-1]]
+        self.placeholders += int(drop.sum())
+        return drop
 
     def _measure_zero(self, dec_v: np.ndarray) -> None:
         # Feed the zero measurement (measure_zero) with the corrected samples.

@@ -235,6 +235,7 @@ class DetectorWiring(DiagnosticsMixin):
         self._time_jumps_seen = 0
         self._carried_seen = None           # the last carried-load measurement logged
         self._zero_seen = None              # the last zero measurement applied
+        self._placeholders_seen = 0         # F/T placeholders (six zeros) warned about
         self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
                          'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
@@ -406,6 +407,7 @@ class DetectorWiring(DiagnosticsMixin):
             self._count_base[name] = self._count_base.get(name, 0) + value
         self.counts['detector_rebuilds'] += 1
         self._time_jumps_seen = 0
+        self._placeholders_seen = 0
         self.get_logger().info(f'audio rate is now {rate:g} Hz: detector rebuilt, state reset')
 
     def detector_counts(self) -> Dict[str, int]:
@@ -556,6 +558,13 @@ class DetectorWiring(DiagnosticsMixin):
             self._carried_seen = carried
             if carried is not None:
                 self._log_carried(carried)
+        placeholders = self.detector.extractor.ft.placeholders
+        if placeholders != self._placeholders_seen:
+            if placeholders > self._placeholders_seen:
+                self._warn('wrench-placeholder', f'F/T sample of six exact zeros after a load '
+                           f'dropped ({placeholders} so far): ' + "the driver's placeholder "
+                           'for a missing reading, not a measurement')
+            self._placeholders_seen = placeholders
         zero = self.detector.zero_measurement
         if zero is not self._zero_seen:
             self._zero_seen = zero

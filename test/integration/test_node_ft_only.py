@@ -215,3 +215,44 @@ def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
         assert len(switched) == 1 and 'model switched to F/T-only' in switched[0]
     finally:
         h.close()
+
+
+def test_zero_wrench_placeholders_never_release_and_are_reported(context):
+    # A driver that publishes six zeros for 0.1 s while the hand holds the object, 1 s before
+    # the contact. Read as a load that went, the shipped F/T-only model releases before the
+    # contact (checked below offline, with the zeros a hair above zero). The node leaves the
+    # zeros out, warns, and releases once, at the contact.
+    trial = simulate_trial(**TRIAL)
+    h = FtHarness(context, **{'audio.enabled': False})
+    try:
+        keep = np.flatnonzero((trial.wrench_t >= trial.onset_t - 2.5)
+                              & (trial.wrench_t < trial.onset_t + 1.0))
+        dropout = (trial.wrench_t >= trial.onset_t - 1.0) & (trial.wrench_t < trial.onset_t - 0.9)
+        force, torque = trial.force.copy(), trial.torque.copy()
+        hair = load_bundle(path=default_ft_model_path())
+        det = ContactDetector(bundle=hair, settings=DetectorSettings(wrench_rate=trial.ft_rate))
+        force[dropout], torque[dropout] = 1e-9, 1e-9
+        early = det.on_wrench(t=trial.wrench_t[keep], force=force[keep], torque=torque[keep])
+        assert early.releases and early.releases[0] < trial.onset_t
+        force[dropout], torque[dropout] = 0.0, 0.0
+        for j in keep:
+            tick = trial.start_time + np.floor(
+                (trial.wrench_t[j] - trial.start_time) / TICK_S) * TICK_S
+            if h.clock_t is None or tick > h.clock_t + 1e-9:
+                h.set_clock(tick)
+            h.send_wrench(trial.wrench_t[j], force[j], torque[j])
+        counts = h.node.detector_counts()
+        assert counts['wrench_placeholders'] == int(dropout[keep].sum()) == 10
+        assert counts['releases'] == 1 and counts['wrench_dropped'] == 0
+        h.spin_until(lambda: len(h.release) == 1)
+        h.spin_until(lambda: any('RELEASE' in m.msg for m in h.logs), timeout=5.0)
+        released = [m.msg for m in h.logs if 'RELEASE' in m.msg]
+        t = float(released[0].split('t=')[1].split(' ')[0])
+        assert len(released) == 1 and trial.onset_t < t <= trial.onset_t + 0.5
+        h.spin_until(lambda: any('six exact zeros' in m.msg for m in h.logs), timeout=5.0)
+        warned = [m.msg for m in h.logs if 'six exact zeros' in m.msg]
+        assert len(warned) == 1 and "driver's placeholder" in warned[0]
+        h.spin_until(lambda: any('wrench_placeholders +' in d.status[0].message
+                                 for d in h.diag), timeout=5.0)
+    finally:
+        h.close()

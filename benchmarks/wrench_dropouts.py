@@ -1,0 +1,110 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What a broken F/T reading 1 s before the contact does to the shipped models.
+
+    .venv/bin/python benchmarks/wrench_dropouts.py [--trials 24] [--seed 8600]
+
+Simulated trials (``--conditions wide``: the twelve families in turn, the hand holding the
+object) get, 1 s before the contact onset, one of these in their F/T samples:
+
+- ``zeros K``: K samples of six exact zeros (a driver's placeholder for a missing reading);
+- ``gone K``: K samples a hair above zero (1e-9: the load really gone, as far as the values
+  say);
+- ``spike K``: K samples with 3, -2 and 5 kN added to the force (a garbled message);
+- ``frozen K``: K samples repeating the one before (a driver that republishes).
+
+Each trial is run through :class:`~contact_detector.detection.detector.ContactDetector` with
+the shipped multimodal and F/T-only models, message by message as the node takes them. The
+output lists, per broken reading, how many trials each model released in before the onset
+(early), caught within 500 ms, and missed. Run it from another checkout (``PYTHONPATH``) to
+compare code versions.
+"""
+
+import argparse
+import dataclasses
+import sys
+from typing import Optional, Sequence
+
+from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.model.shipped import default_ft_model_path, default_model_path
+from contact_detector.model.storage import load_bundle
+from contact_detector.sim.messages import message_events
+from contact_detector.sim.trial import simulate_trials, Trial
+import numpy as np
+
+BREAKS = (('none', 0), ('zeros', 1), ('zeros', 3), ('zeros', 10), ('zeros', 50),
+          ('gone', 3), ('gone', 10), ('spike', 1), ('spike', 3), ('frozen', 20))
+
+
+def broken(trial: Trial, *, kind: str, k: int) -> Trial:
+    """Return ``trial`` with ``k`` F/T samples from 1 s before the onset broken as ``kind``."""
+    force, torque = trial.force.copy(), trial.torque.copy()
+    j = int(np.searchsorted(trial.wrench_t, trial.onset_t - 1.0))
+    span = slice(j, j + k)
+    if kind == 'zeros':
+        force[span], torque[span] = 0.0, 0.0
+    elif kind == 'gone':
+        force[span], torque[span] = 1e-9, 1e-9
+    elif kind == 'spike':
+        force[span] += np.array([3000.0, -2000.0, 5000.0])
+    elif kind == 'frozen':
+        force[span], torque[span] = force[j - 1], torque[j - 1]
+    return dataclasses.replace(trial, force=force, torque=torque)
+
+
+def outcome(trial: Trial, *, bundle) -> str:
+    """Return 'early', 'caught' (within 0.5 s of the onset) or 'missed' for one trial."""
+    detector = ContactDetector(bundle=bundle, settings=DetectorSettings(
+        audio_rate=trial.audio_rate, wrench_rate=trial.ft_rate))
+    for e in message_events(trial=trial):
+        if e.kind == 'audio':
+            decided = detector.on_audio(trial.audio[e.lo:e.hi], stamp=e.t, now=e.t)
+        else:
+            decided = detector.on_wrench(t=trial.wrench_t[e.lo:e.hi],
+                                         force=trial.force[e.lo:e.hi],
+                                         torque=trial.torque[e.lo:e.hi], now=e.t)
+        if decided.releases:
+            t = decided.releases[0]
+            return ('early' if t < trial.onset_t
+                    else 'caught' if t <= trial.onset_t + 0.5 else 'missed')
+    return 'missed'
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the table; print one row per broken reading and model."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--trials', type=int, default=24)
+    parser.add_argument('--seed', type=int, default=8600)
+    args = parser.parse_args(argv)
+    trials = list(simulate_trials(n=args.trials, seed=args.seed, conditions=('wide',)))
+    models = {'multimodal': load_bundle(path=default_model_path()),
+              'F/T-only': load_bundle(path=default_ft_model_path())}
+    print(f'{args.trials} trials, --seed {args.seed} --conditions wide; broken 1 s before the '
+          'onset; early / caught within 500 ms / missed')
+    print('| broken reading | ' + ' | '.join(models) + ' |')
+    print('|---|' + '---|' * len(models))
+    for kind, k in BREAKS:
+        cells = []
+        for bundle in models.values():
+            got = [outcome(broken(trial, kind=kind, k=k), bundle=bundle) for trial in trials]
+            cells.append(' / '.join(str(got.count(w)) for w in ('early', 'caught', 'missed')))
+        name = 'none' if kind == 'none' else f'{kind} {k}'
+        print(f'| {name} | ' + ' | '.join(cells) + ' |', flush=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
