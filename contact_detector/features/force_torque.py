@@ -199,11 +199,6 @@ class ForceTorqueStream:
         self._zero_rows.clear()
         self._zeroing = True
 
-    @property
-    def measuring_zero(self) -> bool:
-        """Whether a zero measurement (:meth:`measure_zero`) is under way."""
-        return self._zeroing
-
     def reset(self) -> None:
         """Forget everything, including the last stamp seen and the carried load."""
         self.last_input_t: Optional[float] = None

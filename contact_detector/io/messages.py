@@ -245,9 +245,13 @@ def audio_stamp(msg: Any, msg_type: str) -> Optional[float]:
 
 def check_stamp(*, stamp: float, now: float, max_future_s: float,
                 previous: Optional[float] = None, backjump_s: float = 0.5,
-                what: str = 'stamp') -> None:
+                what: str = 'stamp', unset_hint: str = '') -> None:
     """
-    Refuse a stamp from the future, or one that repeats or slightly precedes the previous one.
+    Refuse a stamp that is unset, from the future, or repeats or slightly precedes the last.
+
+    A stamp of exactly 0 is a ``header.stamp`` the publisher never set. Taken as a time, it
+    would be a jump back to the epoch, which resets the detector, or, for a driver that never
+    sets it, a repeat of the previous stamp on every message.
 
     Parameters
     ----------
@@ -264,16 +268,20 @@ def check_stamp(*, stamp: float, now: float, max_future_s: float,
         not a duplicate, and passes.
     what : str
         Name used in the message.
+    unset_hint : str
+        Appended to the message for a stamp of 0: what to do about it.
 
     Raises
     ------
     InputError
-        Non-finite stamp, a stamp more than ``max_future_s`` ahead of ``now``, or a repeated /
-        reordered one.
+        Non-finite or unset (0) stamp, a stamp more than ``max_future_s`` ahead of ``now``, or a
+        repeated / reordered one.
 
     """
     if not math.isfinite(stamp):
         raise InputError(f'{what} {stamp!r} is not finite')
+    if stamp == 0.0:
+        raise InputError(f'{what} is 0: the publisher does not set header.stamp{unset_hint}')
     if stamp - now > max_future_s:
         raise InputError(f'{what} {stamp:.6f} is {stamp - now:.3f} s ahead of the receive time '
                          f'{now:.6f} (clocks not synchronised, or use_sim_time without /clock?)')

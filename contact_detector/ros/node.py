@@ -476,7 +476,8 @@ class DetectorWiring(DiagnosticsMixin):
                 try:
                     check_stamp(stamp=stamp, now=now, max_future_s=cfg.max_future_s,
                                 previous=stream.last_stamp, what='audio stamp',
-                                backjump_s=self.detector.extractor.audio.backjump_tolerance_s)
+                                backjump_s=self.detector.extractor.audio.backjump_tolerance_s,
+                                unset_hint=' (set audio.stamp_source: receive)')
                 except InputError:
                     self.counts['bad_stamps'] += 1
                     raise
@@ -516,7 +517,8 @@ class DetectorWiring(DiagnosticsMixin):
             else:
                 try:
                     check_stamp(stamp=t, now=now, max_future_s=self.config.max_future_s,
-                                what='wrench stamp')
+                                what='wrench stamp',
+                                unset_hint=' (set wrench.stamp_source: receive)')
                 except InputError:
                     self.counts['bad_stamps'] += 1
                     raise
@@ -663,9 +665,10 @@ class DetectorWiring(DiagnosticsMixin):
             config = self.bundle.feature_config
             n = config.carried_window
             response.success = True
-            response.message = (f'measuring the F/T zero over the next {n} F/T samples '
-                                f'({n / config.ft_rate_hz:.2f} s): keep the hand empty and '
-                                'still')
+            response.message = (f'measuring the F/T zero over the next '
+                                f'{n / config.ft_rate_hz:.2f} s ({n} samples at the '
+                                f'{config.ft_rate_hz:g} Hz feature rate): keep the hand empty '
+                                'and still')
             self.get_logger().info(response.message)
         except Exception as err:  # a callback must never raise
             response.success, response.message = False, f'{type(err).__name__}: {err}'

@@ -220,6 +220,17 @@ def restamp_wrench(lo, hi, offset):
     return inject
 
 
+def unset_stamp(item):
+    """Return a copy of a wrench item's message whose header.stamp was never set (0)."""
+    w = item.msg.wrench
+    return wrench(0.0, (w.force.x, w.force.y, w.force.z), (w.torque.x, w.torque.y, w.torque.z))
+
+
+def _zero_all(w):
+    # a driver's placeholder for a missing reading: a wrench of six zeros
+    w.force.x = w.force.y = w.force.z = w.torque.x = w.torque.y = w.torque.z = 0.0
+
+
 def _set(name, value):
     def change(w):
         target, axis = name.split('.')
@@ -275,6 +286,13 @@ CASES = [
     Case('wrench_stamps_in_future', add_after('wrench', -2.6, -2.5, wrench_with_stamp(30.0)),
          {'wrench_dropped': 10, 'bad_stamps': 10}, r'ahead of the receive time',
          'bad_stamps', (-2.6, -2.5)),
+    Case('wrench_unset_stamps', add_after('wrench', -2.6, -2.5, unset_stamp),
+         {'wrench_dropped': 10, 'bad_stamps': 10},
+         r'wrench stamp is 0: the publisher does not set header.stamp \(set '
+         r'wrench.stamp_source: receive\)', 'bad_stamps', (-2.6, -2.5)),
+    Case('wrench_zero_placeholders', replace_wrench(-2.6, -2.5, _zero_all),
+         {'wrench_placeholders': 10}, 'F/T sample of six exact zeros after a load dropped',
+         'wrench_placeholders', (-2.6, -2.5)),
     Case('wrench_stamps_jump_back_30s', restamp_wrench(-3.0, -2.8, -30.0),
          {'time_jumps': 1, 'wrench_restarts': 1}, 'time jumped backwards, state reset',
          'time_jumps', (-3.0, -2.5)),

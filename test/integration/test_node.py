@@ -536,7 +536,7 @@ def test_zero_sensor_sets_the_bias_from_what_the_hand_reads(harness_factory, tri
     t0 = trial.start_time
     h.feed(trial, node_support.trial_events(trial, t_to=t0 + 0.8))
     reply = h.call(zero, Trigger.Request())
-    assert reply.success and 'over the next 50 F/T samples (0.50 s)' in reply.message
+    assert reply.success and 'over the next 0.50 s (50 samples at the 100 Hz' in reply.message
     h.feed(trial, node_support.trial_events(trial, t_from=t0 + 0.8, t_to=t0 + 1.6))
     # what the sensor read over the 50 samples after the call (100 Hz: the feature rate)
     after = np.flatnonzero(trial.wrench_t >= t0 + 0.8)[:50]
