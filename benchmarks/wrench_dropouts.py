@@ -16,11 +16,13 @@
 What a broken F/T reading 1 s before the contact does to the shipped models.
 
     .venv/bin/python benchmarks/wrench_dropouts.py [--trials 24] [--seed 8600]
+    .venv/bin/python benchmarks/wrench_dropouts.py --scan DIR_OR_BAG...
 
 Simulated trials (``--conditions wide``: the twelve families in turn, the hand holding the
 object) get, 1 s before the contact onset, one of these in their F/T samples:
 
 - ``zeros K``: K samples of six exact zeros (a driver's placeholder for a missing reading);
+- ``force-zeros K``, ``torque-zeros K``: the force (or the torque) of K samples zeroed;
 - ``gone K``: K samples a hair above zero (1e-9: the load really gone, as far as the values
   say);
 - ``spike K``: K samples with 3, -2 and 5 kN added to the force (a garbled message);
@@ -31,6 +33,10 @@ the shipped multimodal and F/T-only models, message by message as the node takes
 output lists, per broken reading, how many trials each model released in before the onset
 (early), caught within 500 ms, and missed. Run it from another checkout (``PYTHONPATH``) to
 compare code versions.
+
+``--scan`` instead counts, in real or generated recordings, the F/T samples the node would
+leave out as placeholders (the first WrenchStamped topic of each bag): how often the rule
+takes a reading for a placeholder on sensors that never send one.
 """
 
 import argparse
@@ -39,6 +45,9 @@ import sys
 from typing import Optional, Sequence
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.features.config import FeatureConfig
+from contact_detector.features.force_torque import ForceTorqueStream
+from contact_detector.io.bags import find_bags, read_wrench, topic_types, WRENCH_TYPE
 from contact_detector.model.shipped import default_ft_model_path, default_model_path
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim.messages import message_events
@@ -46,7 +55,8 @@ from contact_detector.sim.trial import simulate_trials, Trial
 import numpy as np
 
 BREAKS = (('none', 0), ('zeros', 1), ('zeros', 3), ('zeros', 10), ('zeros', 50),
-          ('gone', 3), ('gone', 10), ('spike', 1), ('spike', 3), ('frozen', 20))
+          ('force-zeros', 10), ('torque-zeros', 10), ('gone', 3), ('gone', 10), ('spike', 1),
+          ('spike', 3), ('frozen', 20))
 
 
 def broken(trial: Trial, *, kind: str, k: int) -> Trial:
@@ -56,6 +66,10 @@ def broken(trial: Trial, *, kind: str, k: int) -> Trial:
     span = slice(j, j + k)
     if kind == 'zeros':
         force[span], torque[span] = 0.0, 0.0
+    elif kind == 'force-zeros':
+        force[span] = 0.0
+    elif kind == 'torque-zeros':
+        torque[span] = 0.0
     elif kind == 'gone':
         force[span], torque[span] = 1e-9, 1e-9
     elif kind == 'spike':
@@ -83,12 +97,36 @@ def outcome(trial: Trial, *, bundle) -> str:
     return 'missed'
 
 
+def scan(paths: Sequence[str]) -> None:
+    """Print how many F/T samples of the recordings would be left out as placeholders."""
+    bags = find_bags(paths)
+    samples = left_out = 0
+    for bag in bags:
+        topics = [name for name, kind in topic_types(bag).items() if kind == WRENCH_TYPE]
+        if not topics:
+            continue
+        wrench = read_wrench(bag, topic=topics[0])
+        # the whole recording in one call: the same samples left out as one per call
+        # (test/unit/features/test_wrench_placeholders.py)
+        stream = ForceTorqueStream(config=FeatureConfig(), input_rate=100.0)
+        stream.push(t=wrench.t, force=wrench.force, torque=wrench.torque)
+        samples += wrench.t.size
+        left_out += stream.placeholders
+        if stream.placeholders:
+            print(f'{bag}: {stream.placeholders} of {wrench.t.size}')
+    print(f'{len(bags)} recordings, {samples} F/T samples, {left_out} left out as placeholders')
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the table; print one row per broken reading and model."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--trials', type=int, default=24)
     parser.add_argument('--seed', type=int, default=8600)
+    parser.add_argument('--scan', nargs='+', metavar='DIR_OR_BAG')
     args = parser.parse_args(argv)
+    if args.scan:
+        scan(args.scan)
+        return 0
     trials = list(simulate_trials(n=args.trials, seed=args.seed, conditions=('wide',)))
     models = {'multimodal': load_bundle(path=default_model_path()),
               'F/T-only': load_bundle(path=default_ft_model_path())}

@@ -74,7 +74,7 @@ class Run:
         str or None
             One line for the tools to print; None when at least half of the frames were
             decided, no frame was stale, non-finite or after a time jump, and no F/T sample
-            was left out as a driver's placeholder (six exact zeros after a load).
+            was left out as a driver's placeholder (a force or torque of exactly 0 after a load).
 
         """
         c = self.counts
@@ -84,8 +84,9 @@ class Run:
             ('stale_frames', 'stale'), ('nonfinite_frames', 'non-finite'),
             ('time_jumps', 'time jumps')) if c.get(k)]
         placeholders = c.get('wrench_placeholders', 0)
-        note = (f'{placeholders} F/T samples of six exact zeros after a load were left out '
-                "(a driver's placeholder for a missing reading)" if placeholders else None)
+        note = (f'{placeholders} F/T samples with a force or torque of exactly (0, 0, 0) after a '
+                "load were left out (a driver's placeholder for a missing reading)"
+                if placeholders else None)
         if frames == 0:
             return f'no frame from {msgs} messages' if msgs else note
         if invalid * 2 <= frames and not found:

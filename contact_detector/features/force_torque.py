@@ -44,6 +44,12 @@ import numpy as np
 #: Columns produced by :class:`ForceTorqueStream`, before the optional delta features.
 FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
 
+#: |F| (N) and |T| (N m) of a load: a force (torque) of exactly (0, 0, 0) right after a reading
+#: of at least this much is a driver's placeholder. Four times the carried-load floors: a
+#: quantised sensor's noise around 0.5 N reads exactly 0 now and then (3 samples in the 3.2
+#: million of the spent generator sets and the simulator's pools at the floors, none at this).
+PLACEHOLDER_AFTER = np.array([2.0, 0.2])
+
 
 class ForceTorqueStream:
     """
@@ -73,12 +79,14 @@ class ForceTorqueStream:
 
     Notes
     -----
-    A sample whose six values are all exactly 0 after a sample with a load (|F| or |T| at or
-    above the carried-load floors) is not a reading: drivers publish such placeholders when a
-    reading is missing, and the jump to nothing and back looks like a contact. It is left out
-    and counted in :attr:`placeholders` (nothing else changes: a gap of a few samples is
+    A sample whose force (or torque) reads exactly (0, 0, 0) while the newest earlier reading
+    of it that was not had a load (:data:`PLACEHOLDER_AFTER`: 2 N, 0.2 N m) is not a
+    reading: drivers publish such placeholders, six zeros or a zeroed half, when a reading is
+    missing, and the jump to nothing and back looks like a contact. It is left out and
+    counted in :attr:`placeholders` (nothing else changes: a gap of a few samples is
     interpolated over, a longer one restarts the window). Exact zeros among readings near
-    zero (a sensor zeroed while idle, quantised) are readings and kept.
+    zero (a sensor zeroed while idle, quantised), or a torque that was always 0 (a driver
+    without torque), are readings and kept.
 
     Every sample is read as ``x - bias`` (:attr:`bias`, shape (6,), N and N m: the sensor's
     zero, :meth:`set_bias`) before anything else. :meth:`measure_zero` measures what that
@@ -158,9 +166,11 @@ class ForceTorqueStream:
         self._zeroing = False
         #: The last completed zero measurement (what the corrected signal read), or None.
         self.zero_measurement: Optional[CarriedLoad] = None
-        #: Samples left out as a driver's placeholder (six exact zeros after a load).
+        #: Samples left out as a driver's placeholder (a force or torque of exactly 0 after
+        #: a load).
         self.placeholders = 0
-        self._last_reading: Optional[np.ndarray] = None     # the newest non-zero raw sample
+        # the newest raw force and torque that were not (0, 0, 0), side by side
+        self._last_reading: Optional[np.ndarray] = None
         self.restarts = 0
         self.reset()
 
@@ -271,7 +281,12 @@ class ForceTorqueStream:
         """
         self.check_stamps(t)
         values = np.concatenate([force, torque], axis=1)
-        if not (values.any() if values.shape[0] == 1 else np.all(values.any(axis=1))):
+        if values.shape[0] == 1:
+            row = values[0].tolist()
+            whole = any(row[:3]) and any(row[3:])
+        else:
+            whole = bool(np.all(values[:, :3].any(axis=1)) and np.all(values[:, 3:].any(axis=1)))
+        if not whole:
             keep = ~self._placeholder_rows(values)
             if not keep.all():
                 t, values = t[keep], values[keep]
@@ -394,23 +409,24 @@ class ForceTorqueStream:
             self._carried_from = self._n_dec + missing - 1
             self._measuring = False
 
-    def _loaded(self, values: np.ndarray) -> np.ndarray:
-        # (n,) whether each raw (n, 6) sample has |F| or |T| at or above the floors
-        return (np.linalg.norm(values[:, :3], axis=1) >= self._floor[0]) \
-            | (np.linalg.norm(values[:, 3:], axis=1) >= self._floor[1])
-
     def _placeholder_rows(self, values: np.ndarray) -> np.ndarray:
-        # (n,) rows of six exact zeros whose newest non-zero predecessor (in this call or an
-        # earlier one) had a load; counts them and keeps the newest non-zero row
-        zero = ~values.any(axis=1)
-        index = np.where(zero, -1, np.arange(zero.size))
-        newest = np.maximum.accumulate(index)           # newest non-zero row at or before
-        earlier = (self._last_reading is not None
-                   and bool(self._loaded(self._last_reading[None])[0]))
-        before = np.where(newest >= 0, self._loaded(values)[np.maximum(newest, 0)], earlier)
-        drop = zero & before
-        if newest[-1] >= 0:
-            self._last_reading = values[newest[-1]]
+        # (n,) rows whose force (or torque) reads exactly (0, 0, 0) while the newest earlier
+        # reading of it that was not (in this call or an earlier one) had a load, |F| or |T|
+        # at or above PLACEHOLDER_AFTER; counts them and keeps the newest non-zero reading
+        drop = np.zeros(values.shape[0], dtype=bool)
+        last = (np.zeros(6) if self._last_reading is None else self._last_reading).copy()
+        for cols, floor in ((slice(0, 3), PLACEHOLDER_AFTER[0]),
+                            (slice(3, 6), PLACEHOLDER_AFTER[1])):
+            part = values[:, cols]
+            zero = ~part.any(axis=1)
+            index = np.where(zero, -1, np.arange(zero.size))
+            newest = np.maximum.accumulate(index)       # newest non-zero row at or before
+            loaded = np.linalg.norm(part, axis=1) >= floor
+            earlier = bool(np.linalg.norm(last[cols]) >= floor)
+            drop |= zero & np.where(newest >= 0, loaded[np.maximum(newest, 0)], earlier)
+            if newest[-1] >= 0:
+                last[cols] = part[newest[-1]]
+        self._last_reading = last
         self.placeholders += int(drop.sum())
         return drop
 

@@ -235,7 +235,7 @@ class DetectorWiring(DiagnosticsMixin):
         self._time_jumps_seen = 0
         self._carried_seen = None           # the last carried-load measurement logged
         self._zero_seen = None              # the last zero measurement applied
-        self._placeholders_seen = 0         # F/T placeholders (six zeros) warned about
+        self._placeholders_seen = 0         # F/T placeholders (exact zeros) warned about
         self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
                          'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
@@ -563,9 +563,9 @@ class DetectorWiring(DiagnosticsMixin):
         placeholders = self.detector.extractor.ft.placeholders
         if placeholders != self._placeholders_seen:
             if placeholders > self._placeholders_seen:
-                self._warn('wrench-placeholder', f'F/T sample of six exact zeros after a load '
-                           f'dropped ({placeholders} so far): ' + "the driver's placeholder "
-                           'for a missing reading, not a measurement')
+                self._warn('wrench-placeholder', 'F/T sample with a force or torque of exactly '
+                           f'(0, 0, 0) after a load dropped ({placeholders} so far): '
+                           "the driver's placeholder for a missing reading, not a measurement")
             self._placeholders_seen = placeholders
         zero = self.detector.zero_measurement
         if zero is not self._zero_seen:

@@ -231,6 +231,11 @@ def _zero_all(w):
     w.force.x = w.force.y = w.force.z = w.torque.x = w.torque.y = w.torque.z = 0.0
 
 
+def _zero_torque(w):
+    # a driver that fills the force and leaves the torque of a missing reading at zero
+    w.torque.x = w.torque.y = w.torque.z = 0.0
+
+
 def _set(name, value):
     def change(w):
         target, axis = name.split('.')
@@ -291,7 +296,11 @@ CASES = [
          r'wrench stamp is 0: the publisher does not set header.stamp \(set '
          r'wrench.stamp_source: receive\)', 'bad_stamps', (-2.6, -2.5)),
     Case('wrench_zero_placeholders', replace_wrench(-2.6, -2.5, _zero_all),
-         {'wrench_placeholders': 10}, 'F/T sample of six exact zeros after a load dropped',
+         {'wrench_placeholders': 10},
+         r'F/T sample with a force or torque of exactly \(0, 0, 0\) after a load dropped',
+         'wrench_placeholders', (-2.6, -2.5)),
+    Case('wrench_zero_torque_placeholders', replace_wrench(-2.6, -2.5, _zero_torque),
+         {'wrench_placeholders': 10}, r'exactly \(0, 0, 0\) after a load dropped',
          'wrench_placeholders', (-2.6, -2.5)),
     Case('wrench_stamps_jump_back_30s', restamp_wrench(-3.0, -2.8, -30.0),
          {'time_jumps': 1, 'wrench_restarts': 1}, 'time jumped backwards, state reset',

@@ -249,8 +249,8 @@ def test_zero_wrench_placeholders_never_release_and_are_reported(context):
         released = [m.msg for m in h.logs if 'RELEASE' in m.msg]
         t = float(released[0].split('t=')[1].split(' ')[0])
         assert len(released) == 1 and trial.onset_t < t <= trial.onset_t + 0.5
-        h.spin_until(lambda: any('six exact zeros' in m.msg for m in h.logs), timeout=5.0)
-        warned = [m.msg for m in h.logs if 'six exact zeros' in m.msg]
+        h.spin_until(lambda: any('exactly (0, 0, 0)' in m.msg for m in h.logs), timeout=5.0)
+        warned = [m.msg for m in h.logs if 'exactly (0, 0, 0)' in m.msg]
         assert len(warned) == 1 and "driver's placeholder" in warned[0]
         h.spin_until(lambda: any('wrench_placeholders +' in d.status[0].message
                                  for d in h.diag), timeout=5.0)

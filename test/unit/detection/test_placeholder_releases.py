@@ -67,5 +67,5 @@ def test_zero_placeholders_do_not_release_and_are_reported(bundle, in_blocks):
     assert placeholders.counts['wrench_placeholders'] == 30
     assert placeholders.counts['wrench_dropped'] == 0          # no hold-off: not corrupt
     assert placeholders.input_problem() == (
-        '30 F/T samples of six exact zeros after a load were left out '
-        "(a driver's placeholder for a missing reading)")
+        '30 F/T samples with a force or torque of exactly (0, 0, 0) after a load were left '
+        "out (a driver's placeholder for a missing reading)")

@@ -13,13 +13,13 @@
 # limitations under the License.
 
 """
-F/T samples of six exact zeros: a driver's placeholder after a load, a reading near zero.
+F/T samples reading exactly zero: a driver's placeholder after a load, a reading near zero.
 
-A driver that loses a reading often publishes a zero wrench instead. After a load, the jump to
-nothing and back is the shape of a contact taking the load off, so
-:class:`ForceTorqueStream` leaves such samples out: the features are those of the recording
-without them, on every path (one sample per call, any batch). Exact zeros among readings near
-zero (a quantised sensor zeroed while idle) are readings and stay.
+A driver that loses a reading often publishes a zero wrench (or a zeroed force or torque)
+instead. After a load, the jump to nothing and back is the shape of a contact taking the load
+off, so :class:`ForceTorqueStream` leaves such samples out: the features are those of the
+recording without them, on every path (one sample per call, any batch). Exact zeros among
+readings near zero (a quantised sensor zeroed while idle) are readings and stay.
 """
 
 from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, SHIFT_FEATURES
@@ -84,6 +84,31 @@ def test_exact_zeros_among_readings_near_zero_are_readings():
                 torque=np.zeros((1, 3)))
     stream.push(t=np.array([t[-1] + 0.02]), force=np.zeros((1, 3)), torque=np.zeros((1, 3)))
     assert stream.placeholders == 1
+
+
+@pytest.mark.parametrize('half', [slice(0, 3), slice(3, 6)])
+def test_a_zeroed_force_or_torque_after_a_load_is_a_placeholder(half):
+    t, values = _held()
+    values[:, 3] += 0.4                 # a torque above its floor too (0.05 N m)
+    broken = values.copy()
+    broken[200:210, half] = 0.0
+    stream = ForceTorqueStream(config=CONFIG, input_rate=RATE)
+    got = _push(stream, t, broken, chunk=1)
+    assert stream.placeholders == 10
+    keep = np.ones(t.size, dtype=bool)
+    keep[200:210] = False
+    want = _push(ForceTorqueStream(config=CONFIG, input_rate=RATE), t[keep], values[keep],
+                 chunk=400)
+    np.testing.assert_array_equal(got[1], want[1])
+
+
+def test_a_torque_that_was_always_zero_is_a_reading():
+    # a driver without torque: its torque is (0, 0, 0) from the start, never after a load
+    t, values = _held()
+    values[:, 3:] = 0.0
+    stream = ForceTorqueStream(config=CONFIG, input_rate=RATE)
+    _push(stream, t, values, chunk=1)
+    assert stream.placeholders == 0
 
 
 def test_a_torque_alone_counts_as_a_load():
