@@ -13,26 +13,31 @@
 # limitations under the License.
 
 """
-What a broken F/T reading 1 s before the contact does to the shipped models.
+What a broken F/T reading or audio stream 1 s before the contact does to the shipped models.
 
-    .venv/bin/python benchmarks/wrench_dropouts.py [--trials 24] [--seed 8600]
-    .venv/bin/python benchmarks/wrench_dropouts.py --scan DIR_OR_BAG...
+    .venv/bin/python benchmarks/sensor_faults.py [--trials 24] [--seed 8600]
+    .venv/bin/python benchmarks/sensor_faults.py --scan DIR_OR_BAG...
 
 Simulated trials (``--conditions wide``: the twelve families in turn, the hand holding the
-object) get, 1 s before the contact onset, one of these in their F/T samples:
+object) get, 1 s before the contact onset, one of these faults:
 
-- ``zeros K``: K samples of six exact zeros (a driver's placeholder for a missing reading);
+- ``zeros K``: K F/T samples of six exact zeros (a driver's placeholder for a missing reading);
 - ``force-zeros K``, ``torque-zeros K``: the force (or the torque) of K samples zeroed;
 - ``gone K``: K samples a hair above zero (1e-9: the load really gone, as far as the values
   say);
 - ``spike K``: K samples with 3, -2 and 5 kN added to the force (a garbled message);
-- ``frozen K``: K samples repeating the one before (a driver that republishes).
+- ``frozen K``: K samples repeating the one before (a driver that republishes);
+- ``audio-zeros MS``, ``audio-silent``: MS milliseconds of digital silence, or silence from
+  then on (a muted microphone, an underrun filled with zeros);
+- ``audio-clip MS``, ``audio-dc MS``, ``audio-noise MS``, ``audio-gain30 MS``: the samples
+  at full scale with their sign, held at +20000, replaced by full-scale white noise, or x30
+  (clipped).
 
 Each trial is run through :class:`~contact_detector.detection.detector.ContactDetector` with
-the shipped multimodal and F/T-only models, message by message as the node takes them. The
-output lists, per broken reading, how many trials each model released in before the onset
-(early), caught within 500 ms, and missed. Run it from another checkout (``PYTHONPATH``) to
-compare code versions.
+the shipped multimodal and F/T-only models, message by message as the node takes them (the
+F/T-only model ignores audio: its audio rows are left out). The output lists, per fault, how
+many trials each model released in before the onset (early), caught within 500 ms, and
+missed. Run it from another checkout (``PYTHONPATH``) to compare code versions.
 
 ``--scan`` instead counts, in real or generated recordings, the F/T samples the node would
 leave out as placeholders (the first WrenchStamped topic of each bag): how often the rule
@@ -56,11 +61,15 @@ import numpy as np
 
 BREAKS = (('none', 0), ('zeros', 1), ('zeros', 3), ('zeros', 10), ('zeros', 50),
           ('force-zeros', 10), ('torque-zeros', 10), ('gone', 3), ('gone', 10), ('spike', 1),
-          ('spike', 3), ('frozen', 20))
+          ('spike', 3), ('frozen', 20), ('audio-zeros', 50), ('audio-zeros', 300),
+          ('audio-silent', 0), ('audio-clip', 50), ('audio-dc', 500), ('audio-noise', 300),
+          ('audio-gain30', 300))
 
 
 def broken(trial: Trial, *, kind: str, k: int) -> Trial:
-    """Return ``trial`` with ``k`` F/T samples from 1 s before the onset broken as ``kind``."""
+    """Return ``trial`` with ``k`` F/T samples (ms of audio) from 1 s before the onset broken."""
+    if kind.startswith('audio-'):
+        return broken_audio(trial, kind=kind[6:], ms=k)
     force, torque = trial.force.copy(), trial.torque.copy()
     j = int(np.searchsorted(trial.wrench_t, trial.onset_t - 1.0))
     span = slice(j, j + k)
@@ -77,6 +86,25 @@ def broken(trial: Trial, *, kind: str, k: int) -> Trial:
     elif kind == 'frozen':
         force[span], torque[span] = force[j - 1], torque[j - 1]
     return dataclasses.replace(trial, force=force, torque=torque)
+
+
+def broken_audio(trial: Trial, *, kind: str, ms: int) -> Trial:
+    """Return ``trial`` with ``ms`` milliseconds of audio from 1 s before the onset broken."""
+    audio = trial.audio.copy()
+    i = int((trial.onset_t - 1.0 - trial.start_time) * trial.audio_rate)
+    n = audio.size - i if kind == 'silent' else int(ms * trial.audio_rate / 1000)
+    part = audio[i:i + n]
+    if kind in ('zeros', 'silent'):
+        part[:] = 0
+    elif kind == 'clip':
+        part[:] = np.where(part >= 0, 32767, -32768)
+    elif kind == 'dc':
+        part[:] = 20000
+    elif kind == 'noise':
+        part[:] = np.random.default_rng(0).integers(-32768, 32767, size=part.size)
+    elif kind == 'gain30':
+        part[:] = np.clip(part.astype(np.int64) * 30, -32768, 32767)
+    return dataclasses.replace(trial, audio=audio)
 
 
 def outcome(trial: Trial, *, bundle) -> str:
@@ -137,9 +165,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     for kind, k in BREAKS:
         cells = []
         for bundle in models.values():
+            if kind.startswith('audio') and bundle.feature_config.ft_only:
+                cells.append('(ignores audio)')
+                continue
             got = [outcome(broken(trial, kind=kind, k=k), bundle=bundle) for trial in trials]
             cells.append(' / '.join(str(got.count(w)) for w in ('early', 'caught', 'missed')))
-        name = 'none' if kind == 'none' else f'{kind} {k}'
+        name = 'none' if kind == 'none' else kind if kind == 'audio-silent' else f'{kind} {k}'
         print(f'| {name} | ' + ' | '.join(cells) + ' |', flush=True)
     return 0
 
