@@ -32,6 +32,7 @@ from contact_detector.errors import ConfigError, InputError
 from contact_detector.features.audio import to_unit_audio
 from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.config import LOAD_DIRECTION_FEATURE, LOAD_FEATURE
+from contact_detector.features.force_torque import bias_vector
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
@@ -96,10 +97,13 @@ class DetectorSettings:
     def __post_init__(self) -> None:
         """Validate ranges; raise ConfigError naming the field."""
         bias = self.wrench_bias
-        if not (isinstance(bias, tuple) and len(bias) == 6
-                and all(isinstance(b, (int, float)) and not isinstance(b, bool)
-                        and math.isfinite(b) for b in bias)):
-            raise ConfigError(f'wrench_bias must be a tuple of 6 finite numbers, got {bias!r}')
+        try:
+            if not isinstance(bias, tuple):
+                raise InputError(f'not a tuple: {bias!r}')
+            bias_vector(bias)
+        except InputError as err:
+            raise ConfigError(f'wrench_bias must be a tuple of 6 finite numbers: {err}'
+                              ) from err
         tol = self.audio_rate_tolerance
         if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol)
                                     and 0 < tol < 1):

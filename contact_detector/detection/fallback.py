@@ -148,12 +148,12 @@ class AudioFallback:
         return self.primary.bias
 
     def set_bias(self, bias: Sequence[float]) -> None:
-        """Give both detectors a new F/T zero; if it changed, :meth:`reset` (ConfigError)."""
-        before = self.bias
-        self.primary.set_bias(bias)
+        """Give both detectors a new F/T zero; if it changed, back to the multimodal model."""
+        before, armed = self.bias, self.armed
+        self.primary.set_bias(bias)         # each resets its own stream state (ConfigError)
         self.fallback.set_bias(bias)
         if self.bias != before:
-            self.reset()
+            self._init_state(armed=armed)
 
     def measure_zero(self) -> None:
         """Measure the sensor's zero in the multimodal detector (both see the same samples)."""

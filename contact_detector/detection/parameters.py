@@ -269,9 +269,18 @@ def check_value(name: str, value: Any) -> Any:
     if spec is None:
         raise ConfigError(f'unknown parameter {name!r}')
     if isinstance(spec.default, tuple):
-        return _check_array(spec, value)
-    want = type(spec.default)
-    # Floating-point parameters take integers too (dynamically typed, see ParamSpec).
+        # a double array (list, tuple, rclpy's array): each element checked as a float
+        size = len(spec.default)
+        if not isinstance(value, (list, tuple, array.array)) or len(value) != size:
+            raise ConfigError(f'parameter {name} must be a list of {size} numbers, '
+                              f'got {value!r}')
+        return tuple(_check_one(spec, v, float) for v in value)
+    return _check_one(spec, value, type(spec.default))
+
+
+def _check_one(spec: ParamSpec, value: Any, want: type) -> Any:
+    # type (floats take integers too: dynamically typed, see ParamSpec), finite, range, choices
+    name = spec.name
     if want is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if type(value) is not want:
@@ -283,22 +292,6 @@ def check_value(name: str, value: Any) -> Any:
     if spec.choices and value not in spec.choices:
         raise ConfigError(f'parameter {name}={value!r} must be one of {list(spec.choices)}')
     return value
-
-
-def _check_array(spec: ParamSpec, value: Any) -> tuple:
-    """Check a double-array value (list, tuple, rclpy's array); return a tuple of floats."""
-    size = len(spec.default)
-    if not isinstance(value, (list, tuple, array.array)) or len(value) != size \
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-        raise ConfigError(f'parameter {spec.name} must be a list of {size} numbers, '
-                          f'got {value!r}')
-    out = tuple(float(v) for v in value)
-    if not all(map(math.isfinite, out)):
-        raise ConfigError(f'parameter {spec.name} must be finite, got {list(out)!r}')
-    if spec.low is not None and not all(spec.low <= v <= spec.high for v in out):
-        raise ConfigError(f'parameter {spec.name}={list(out)!r} has a value outside '
-                          f'[{spec.low}, {spec.high}]')
-    return out
 
 
 def config_from_values(values: Mapping[str, Any]) -> NodeConfig:

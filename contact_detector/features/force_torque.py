@@ -51,6 +51,36 @@ FT_SPECTRAL_COLUMNS = PAPER_FEATURES[1:]
 PLACEHOLDER_AFTER = np.array([2.0, 0.2])
 
 
+def bias_vector(bias: Sequence[float]) -> np.ndarray:
+    """
+    Check an F/T sensor's zero and return it as an array.
+
+    Parameters
+    ----------
+    bias : sequence of 6 float
+        Force x, y, z in N, then torque x, y, z in N m.
+
+    Returns
+    -------
+    np.ndarray, shape (6,)
+
+    Raises
+    ------
+    InputError
+        Not 6 finite numbers (a bool is not a number here).
+
+    """
+    try:
+        if any(isinstance(b, bool) for b in bias):
+            raise TypeError('a bool is not a bias')
+        value = np.array([float(b) for b in bias], dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as err:
+        raise InputError(f'the F/T bias must be 6 numbers, got {bias!r}') from err
+    if value.shape != (6,) or not np.all(np.isfinite(value)):
+        raise InputError(f'the F/T bias must be 6 finite numbers, got {bias!r}')
+    return value
+
+
 class ForceTorqueStream:
     """
     Spectral features of |F| and |T| over a sliding DFT window.
@@ -186,17 +216,11 @@ class ForceTorqueStream:
         Raises
         ------
         InputError
-            Not 6 finite numbers.
+            Not 6 finite numbers (:func:`bias_vector`).
 
         """
-        try:
-            value = np.array([float(b) for b in bias], dtype=np.float64)
-        except (TypeError, ValueError, OverflowError) as err:
-            raise InputError(f'the F/T bias must be 6 numbers, got {bias!r}') from err
-        if value.shape != (6,) or not np.all(np.isfinite(value)):
-            raise InputError(f'the F/T bias must be 6 finite numbers, got {bias!r}')
-        self.bias = value
-        self._biased = bool(np.any(value != 0.0))
+        self.bias = bias_vector(bias)
+        self._biased = bool(np.any(self.bias != 0.0))
 
     def measure_zero(self) -> None:
         """
@@ -397,16 +421,24 @@ class ForceTorqueStream:
         held[:, 2:] = low[:, 2:]
         return held
 
+    def _collect(self, rows: TailBuffer, dec_v: np.ndarray) -> Optional[CarriedLoad]:
+        # Add decimated samples to a measurement of carried_window rows (the carried load or
+        # the zero); return the measurement once it is complete, else None.
+        missing = self.config.carried_window - rows.view.shape[0]
+        rows.extend(dec_v[:missing])
+        if dec_v.shape[0] < missing:
+            return None
+        return measure_carried_load(rows=rows.view, floor=self._floor)
+
     def _measure(self, dec_v: np.ndarray) -> None:
         # Feed the carried-load measurement; the decimated index from which the new carried
         # load applies is self._carried_from (frames before it keep the previous one).
-        missing = self.config.carried_window - self._carried_rows.view.shape[0]
-        self._carried_rows.extend(dec_v[:missing])
-        if dec_v.shape[0] >= missing:
+        before = self._carried_rows.view.shape[0]
+        done = self._collect(self._carried_rows, dec_v)
+        if done is not None:
             self._previous_carried = self.carried
-            self.carried_load = measure_carried_load(rows=self._carried_rows.view,
-                                                     floor=self._floor)
-            self._carried_from = self._n_dec + missing - 1
+            self.carried_load = done
+            self._carried_from = self._n_dec + self.config.carried_window - before - 1
             self._measuring = False
 
     def _placeholder_rows(self, values: np.ndarray) -> np.ndarray:
@@ -432,11 +464,9 @@ class ForceTorqueStream:
 
     def _measure_zero(self, dec_v: np.ndarray) -> None:
         # Feed the zero measurement (measure_zero) with the corrected samples.
-        missing = self.config.carried_window - self._zero_rows.view.shape[0]
-        self._zero_rows.extend(dec_v[:missing])
-        if dec_v.shape[0] >= missing:
-            self.zero_measurement = measure_carried_load(rows=self._zero_rows.view,
-                                                         floor=self._floor)
+        done = self._collect(self._zero_rows, dec_v)
+        if done is not None:
+            self.zero_measurement = done
             self._zeroing = False
 
     @property
