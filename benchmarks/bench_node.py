@@ -214,7 +214,8 @@ def _wrench_msg(t: float, force, torque):
     return msg
 
 
-def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0) -> dict:
+def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0,
+           settings=()) -> dict:
     """
     Call the node's callbacks directly with real messages of a trial (no DDS, no executor).
 
@@ -248,7 +249,9 @@ def replay(*, model: str, audio_rate: int, ft_rate: float, gap_s: float = 0.0) -
         Parameter('model.path', value=model),
         Parameter('audio.sample_rate', value=float(audio_rate)),
         Parameter('wrench.rate', value=float(ft_rate)),
-        Parameter('use_sim_time', value=True)])
+        Parameter('use_sim_time', value=True),
+        *[Parameter(name, value=json.loads(value))
+          for name, value in (item.split('=', 1) for item in settings)]])
     clock = node.get_clock()
     gc.collect()
     gc.freeze()
@@ -301,7 +304,8 @@ def main() -> None:
     parser.add_argument('--replay-only', action='store_true', help='skip the live runs')
     parser.add_argument('--live-only', action='store_true', help='skip the replays')
     parser.add_argument('--set', action='append', default=[], metavar='NAME=JSON',
-                        help='live: a node parameter, e.g. executor.lazy_wrench=true')
+                        help='a node parameter, e.g. executor.lazy_wrench=true or '
+                        'model.ft_also_decides=true')
     parser.add_argument('--only', default='', help='run one configuration, AUDIO_HZ:FT_HZ '
                         '(e.g. 44100:100)')
     args = parser.parse_args()
@@ -333,7 +337,7 @@ def main() -> None:
     print('|---|---|---|---|---|---|')
     for audio_rate, ft_rate in ([] if args.live_only else configs):
         runs = [replay(model=model, audio_rate=audio_rate, ft_rate=ft_rate,
-                       gap_s=args.gap_ms * 1e-3)
+                       gap_s=args.gap_ms * 1e-3, settings=args.set)
                 for _ in range(args.repeats)]
         cpu = statistics.median(100 * r['cpu'] for r in runs)
         print(f'| {audio_rate / 1000:g} kHz | {ft_rate:g} Hz | {cpu:.1f} '

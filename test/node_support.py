@@ -52,6 +52,17 @@ def trial_events(trial: Trial, *, t_from: float = -np.inf,
     return message_events(trial=trial, t_from=t_from, t_to=t_to)
 
 
+def sensor_event(trial: Trial, event: Event):
+    """Return one of :func:`trial_events` as the offline tools read it, received at its time."""
+    from contact_detector.io.sensor_stream import AudioEvent, WrenchEvent
+
+    if event.kind == 'audio':
+        return AudioEvent(samples=trial.audio[event.lo:event.hi], stamp=event.t, now=event.t)
+    span = slice(event.lo, event.hi)
+    return WrenchEvent(t=trial.wrench_t[span], force=trial.force[span],
+                       torque=trial.torque[span], now=event.t)
+
+
 def trial_features(trial: Trial, config: FeatureConfig) -> tuple:
     """Feature frames of a trial fed as the node would (audio stamped with its log time)."""
     extractor = StreamingFeatureExtractor(config=config, audio_rate=trial.audio_rate,

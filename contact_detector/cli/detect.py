@@ -25,13 +25,17 @@ topics, the audio format and the F/T rate are found in each bag
 
 Writes one JSON object per line: for every audio frame
 ``{"bag": NAME, "t": T, "p": P, "contact": B}`` and for every release
-``{"bag": NAME, "t": T, "event": "release"}``; NAME is the bag directory's (or file's) name,
+``{"bag": NAME, "t": T, "event": "release"}`` (with ``"model": "F/T-only"`` or ``"audio +
+F/T"`` when two models decide); NAME is the bag directory's (or file's) name,
 with as much of its path as tells apart bags of the same name from different folders
 (``day1/trial_0000``, as ``evaluate`` names them), T the absolute
 bag time in seconds of the last audio sample the decision used (of the last F/T sample with an
-F/T-only model). Each bag starts a fresh detector, armed. A recording without the audio topic
-is decided by the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the
-command prints which model it used. ``--params`` reads the node's YAML parameter file (the
+F/T-only model). Each bag starts a fresh detector, armed. With ``model.ft_also_decides: true``
+in ``--params``, as on the node, a multimodal model decides together with the shipped F/T-only
+model and the first release of either is the release; the frames written are the multimodal
+model's. A recording without the audio topic is decided by
+the shipped F/T-only model unless ``--model`` (or ``model.path``) names one; the command prints
+which models it used. ``--params`` reads the node's YAML parameter file (the
 ``contact_detector_node: ros__parameters:`` section), so offline runs use the robot's settings;
 its ``audio.sample_rate`` serves bags that do not describe their audio, and ``--audio-rate``
 overrides both.
@@ -97,7 +101,8 @@ def _detect(args: argparse.Namespace) -> int:
             rows = [(float(t), 0, {'bag': name, 't': float(t), 'p': float(p),
                                    'contact': bool(c)})
                     for t, p, c in zip(run.t, run.p, run.contact)]
-            rows += [(float(t), 1, {'bag': name, 't': float(t), 'event': 'release'})
+            by = {'model': run.released_by} if run.released_by else {}
+            rows += [(float(t), 1, {'bag': name, 't': float(t), 'event': 'release', **by})
                      for t in run.releases]
             # A release line follows the frame that fired it.
             lines = [json.dumps(row) for _, _, row in sorted(rows, key=lambda r: r[:2])]

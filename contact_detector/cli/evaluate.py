@@ -15,8 +15,9 @@
 """
 ``contact-detector evaluate``: event metrics of the forest and the baselines against truth.
 
-    contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-ft|threshold|highpass|
-                              lowpass-bandpass|audio-onset|all ...] [--model M] [--ft-model M]
+    contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-both|forest-ft|threshold|
+                              highpass|lowpass-bandpass|audio-onset|all ...] [--model M]
+                              [--ft-model M]
                               [--labels labels.csv] [--report DIR]
 
 Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), missed, late,
@@ -32,9 +33,11 @@ sees the same decoded messages. The per-recording table (printed with ``--labels
 detector's verdicts on each recording. With ``--report``: summary.md, metrics.json,
 per-trial rows, a latency histogram and ``recordings.png`` (each recording's labelled onsets
 and every detector's contact events on one time line).
-``forest`` is ``--model``, else the shipped model the recording needs (the F/T-only one for a
-recording without an audio topic); ``forest-ft`` the F/T-only model on every recording. The
-models used are printed.
+``forest`` is what the node runs: ``--model``, else the shipped model the recording needs (the
+F/T-only one for a recording without an audio topic), with the shipped F/T-only model deciding
+beside a multimodal one if ``model.ft_also_decides`` is true in ``--params`` (the first release
+of either); ``forest-both`` that model with the F/T-only model beside it in any case;
+``forest-ft`` the F/T-only model on every recording. The models used are printed.
 """
 
 import argparse
@@ -55,9 +58,10 @@ from contact_detector.training.protocol import labels_for
 from tqdm import tqdm
 
 #: ``forest``: the model of ``--model``, else the shipped one the recording needs (multimodal
-#: with an audio topic, F/T-only without); ``forest-ft``: the F/T-only model (``--ft-model``,
-#: else the shipped one) on every recording, for a comparison.
-DETECTORS = ('forest', 'forest-ft') + BASELINES
+#: with an audio topic, F/T-only without), as the node runs it (``model.ft_also_decides``);
+#: ``forest-both``: with the shipped F/T-only model deciding beside a multimodal one;
+#: ``forest-ft``: the F/T-only model (``--ft-model``, else the shipped one) on every recording.
+DETECTORS = ('forest', 'forest-both', 'forest-ft') + BASELINES
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -87,7 +91,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                               audio_rate=args.audio_rate)
         probe = make()
         params = read_param_file(args.params) if args.params else {}
-        make_ft = None
+        make_ft = make_both = None
+        if 'forest-both' in detectors:
+            make_both, _ = build_detector_factory(model=args.model, params_file=args.params,
+                                                  audio_rate=args.audio_rate)
+            make_both.ft_also_decides = True
         if 'forest-ft' in detectors:
             make_ft, _ = build_detector_factory(model=args.ft_model, params_file=args.params,
                                                 audio_rate=args.audio_rate)
@@ -109,8 +117,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,
                            wrench_rate=probe.settings.wrench_rate,
-                           label_window=probe.bundle.label_window, found=found,
+                           label_window=make.bundle_for().label_window, found=found,
                            stream=stream, labels=labels, make_ft=make_ft,
+                           make_both=make_both,
                            progress=lambda bags: tqdm(bags, desc='evaluate', unit='bag',
                                                       disable=len(bags) < 3),
                            log=lambda line: print(line, file=sys.stderr))

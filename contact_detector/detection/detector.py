@@ -519,9 +519,22 @@ class ContactDetector:
             start = max(latest)
             if isinstance(stamp, (int, float)) and math.isfinite(stamp):
                 start = max(start, min(float(stamp), start + MAX_DROP_AHEAD_S))
-            self._holdoff_until = max(self._holdoff_until,
-                                      start + self.settings.corrupt_holdoff_s)
+            self.hold_off_until(start + self.settings.corrupt_holdoff_s)
         return Decisions.empty(error=message)
+
+    @property
+    def holdoff_until(self) -> float:
+        """Return the stream time before which no frame releases (a corrupt input), s."""
+        return self._holdoff_until
+
+    def hold_off_until(self, t: float) -> None:
+        """
+        Let no frame before stream time ``t`` (s) release; a later hold-off stands.
+
+        :meth:`drop` calls it; so does :class:`~.fallback.AudioFallback`, which gives the
+        F/T-only model deciding beside the audio model the audio model's hold-off.
+        """
+        self._holdoff_until = max(self._holdoff_until, t)
 
     def decide(self, frames: FeatureFrames, *,
                now: Union[None, float, np.ndarray]) -> Decisions:

@@ -19,14 +19,16 @@ Detectors for recordings, configured like the node: the offline tools' way to th
 section of a YAML file) and returns a :class:`DetectorFactory` that gives each recording a
 fresh, armed :class:`~contact_detector.detection.detector.ContactDetector` with the model it
 needs (the shipped multimodal one, the shipped F/T-only one for recordings without audio, or
-the model named), at that recording's rates.
+the model named), at that recording's rates; with ``model.ft_also_decides`` a multimodal model
+with the shipped F/T-only model deciding beside it, as on the node.
 """
 
 import dataclasses
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Union
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.fallback import AudioFallback
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.detection.parameters import read_param_file
 from contact_detector.detection.release import rule_overrides
@@ -70,7 +72,8 @@ class DetectorFactory:
     ``model`` given (``--model`` or ``model.path``): always that model. Otherwise the shipped
     multimodal model for recordings with an audio topic and the shipped F/T-only model for
     recordings without one, or for every recording when ``audio_enabled`` is False (the node's
-    ``audio.enabled``).
+    ``audio.enabled``). With ``ft_also_decides`` a multimodal model decides together with the
+    shipped F/T-only model (:class:`AudioFallback` with ``both_decide``), as the node does.
 
     Parameters
     ----------
@@ -82,15 +85,19 @@ class DetectorFactory:
         :class:`DetectorSettings` fields (without the rule).
     rule : dict or None
         Decision rule fields that override each model's own rule.
+    ft_also_decides : bool
+        The node's ``model.ft_also_decides``: the shipped F/T-only model decides beside a
+        multimodal model, the first release of either is the release.
 
     """
 
     def __init__(self, *, model: Optional[Path], audio_enabled: bool, settings: dict,
-                 rule: Optional[dict]) -> None:
+                 rule: Optional[dict], ft_also_decides: bool = False) -> None:
         self.model = model
         self.audio_enabled = audio_enabled
         self.settings = settings
         self.rule = rule
+        self.ft_also_decides = ft_also_decides
         self._loaded: dict = {}
 
     def path_for(self, *, has_audio: bool = True) -> Path:
@@ -103,7 +110,14 @@ class DetectorFactory:
 
     def bundle_for(self, *, has_audio: bool = True) -> ModelBundle:
         """Return the loaded model for a recording with (or without) an audio topic."""
-        path = self.path_for(has_audio=has_audio)
+        return self._load(self.path_for(has_audio=has_audio))
+
+    def pairs_with_ft(self, *, has_audio: bool = True) -> bool:
+        """Whether the shipped F/T-only model decides too for such a recording."""
+        return (self.ft_also_decides
+                and not self.bundle_for(has_audio=has_audio).feature_config.ft_only)
+
+    def _load(self, path: Path) -> ModelBundle:
         if path not in self._loaded:
             bundle = load_bundle(path=path)
             settings = dict(self.settings)
@@ -118,7 +132,12 @@ class DetectorFactory:
         """``PATH (model id, F/T-only or audio + F/T)`` for the messages the tools print."""
         bundle = self.bundle_for(has_audio=has_audio)
         kind = 'F/T-only' if bundle.feature_config.ft_only else 'audio + F/T'
-        return f'{self.path_for(has_audio=has_audio)} ({bundle.model_id}, {kind})'
+        text = f'{self.path_for(has_audio=has_audio)} ({bundle.model_id}, {kind})'
+        if self.pairs_with_ft(has_audio=has_audio):
+            ft = self._load(default_ft_model_path())
+            text += (f' and {default_ft_model_path()} ({ft.model_id}, F/T-only), the first '
+                     'release of either (model.ft_also_decides)')
+        return text
 
     @property
     def decides_without_audio(self) -> bool:
@@ -126,17 +145,26 @@ class DetectorFactory:
         return self.bundle_for(has_audio=False).feature_config.ft_only
 
     def __call__(self, streams: Optional[Streams] = None, *,
-                 has_audio: bool = True) -> ContactDetector:
+                 has_audio: bool = True) -> Union[ContactDetector, AudioFallback]:
         """
         Return a fresh, armed detector for a recording with (or without) audio.
 
         Given a bag's :class:`Streams`, the recording has audio if it has an audio topic, and
-        the detector runs at that bag's audio and F/T rates.
+        the detector runs at that bag's audio and F/T rates. With :meth:`pairs_with_ft`, two
+        models that both decide (:func:`~contact_detector.detection.offline.run_both`).
         """
         if streams is not None:
             has_audio = streams.has_audio
-        bundle = self.bundle_for(has_audio=has_audio)
-        settings = self._loaded[self.path_for(has_audio=has_audio)][1]
+        detector = self._fresh(self.path_for(has_audio=has_audio), streams)
+        if not self.pairs_with_ft(has_audio=has_audio):
+            return detector
+        return AudioFallback(primary=detector,
+                             fallback=self._fresh(default_ft_model_path(), streams),
+                             timeout_s=0.0, both_decide=True)
+
+    def _fresh(self, path: Path, streams: Optional[Streams]) -> ContactDetector:
+        bundle = self._load(path)
+        settings = self._loaded[path][1]
         if streams is not None:
             rates = {'wrench_rate': streams.wrench_rate}
             if streams.audio_rate is not None:
@@ -165,7 +193,8 @@ def build_detector_factory(*, model: Optional[Path], params_file: Optional[Path]
     settings, stream, model_param, rule = settings_from_params(params, audio_rate=audio_rate)
     path = model or (Path(model_param) if model_param else None)
     make = DetectorFactory(model=path, audio_enabled=bool(params.get('audio.enabled', True)),
-                           settings=settings, rule=rule)
+                           settings=settings, rule=rule,
+                           ft_also_decides=bool(params.get('model.ft_also_decides', False)))
     make.bundle_for(has_audio=True)         # a missing or bad model fails here, not per bag
     return make, stream
 

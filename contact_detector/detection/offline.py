@@ -21,9 +21,13 @@ log-time order, audio stamped as the node stamps it.
 """
 
 from dataclasses import dataclass, field
-from typing import Iterable, List, Optional
+import math
+from typing import Iterable, List, Optional, Union
 
 from contact_detector.detection.detector import ContactDetector, Decisions
+from contact_detector.detection.fallback import (AudioFallback, first_release, FT_ONLY,
+                                                 merge_events, MULTIMODAL)
+from contact_detector.errors import ConfigError
 from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.frames import FeatureFrames
 from contact_detector.features.streaming import StreamingFeatureExtractor
@@ -49,6 +53,9 @@ class Run:
     carried : CarriedLoad or None
         The detector's last carried-load measurement (None if its model has no carried-load
         feature or the recording is shorter than the measurement).
+    released_by : str or None
+        With two models deciding (:func:`run_both`), which one made the release
+        (:data:`~contact_detector.detection.fallback.MULTIMODAL` or ``FT_ONLY``); else None.
 
     """
 
@@ -60,6 +67,7 @@ class Run:
     events: List[float] = field(default_factory=list)
     counts: dict = field(default_factory=dict)
     carried: Optional[CarriedLoad] = None
+    released_by: Optional[str] = None
 
     def input_problem(self) -> Optional[str]:
         """
@@ -101,7 +109,7 @@ class Run:
         return text if note is None else f'{text}; {note}'
 
 
-def run_detector(events: Iterable[Event], *, detector: ContactDetector,
+def run_detector(events: Iterable[Event], *, detector: Union[ContactDetector, AudioFallback],
                  in_blocks: bool = True) -> Run:
     """
     Feed events to ``detector`` as the node would; return every frame's decision.
@@ -110,8 +118,9 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
     ----------
     events : iterable of Event
         From :func:`contact_detector.io.sensor_stream.sensor_events`.
-    detector : ContactDetector
-        A fresh detector (armed as wanted).
+    detector : ContactDetector or AudioFallback
+        A fresh detector (armed as wanted), or two models that both decide
+        (:func:`run_both`).
     in_blocks : bool
         Decide a clean recording in blocks (:mod:`contact_detector.detection.blocks`: the same
         bits, ~20x faster); False, or a recording with anything the node would drop, reset or
@@ -122,15 +131,31 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
     Run
 
     """
+    if isinstance(detector, AudioFallback):
+        return run_both(events, pair=detector, in_blocks=in_blocks)
     if in_blocks:
-        from contact_detector.detection.blocks import run_blocks
-
         events = list(events)
-        decided = run_blocks(events, detector=detector)
-        if decided is not None:
-            return Run(t=decided.t, p=decided.p, contact=decided.contact, valid=decided.valid,
-                       releases=decided.releases, events=decided.events,
-                       counts=dict(detector.counts), carried=detector.carried_load)
+        run = _in_blocks(events, detector=detector)
+        if run is not None:
+            return run
+    return _by_message(events, detector=detector)
+
+
+def _in_blocks(events: List[Event], *, detector: ContactDetector) -> Optional[Run]:
+    """Decide the recording in blocks; None if it needs the per-message path."""
+    from contact_detector.detection.blocks import run_blocks
+
+    decided = run_blocks(events, detector=detector)
+    if decided is None:
+        return None
+    return Run(t=decided.t, p=decided.p, contact=decided.contact, valid=decided.valid,
+               releases=decided.releases, events=decided.events,
+               counts=dict(detector.counts), carried=detector.carried_load)
+
+
+def _by_message(events: Iterable[Event], *,
+                detector: Union[ContactDetector, AudioFallback]) -> Run:
+    """Decide the recording message by message, as the node takes it."""
     blocks: List[Decisions] = []
     for event in events:
         if isinstance(event, AudioEvent):
@@ -141,17 +166,77 @@ def run_detector(events: Iterable[Event], *, detector: ContactDetector,
         elif isinstance(event, BadEvent):
             blocks.append(detector.drop(kind=event.kind, reason=event.reason, stamp=event.now))
     blocks.append(detector.flush())
+    releases = [r for b in blocks for r in b.releases]
+    contact_events = [e for b in blocks for e in b.events]
     blocks = [b for b in blocks if len(b)]
     if not blocks:
         z = np.zeros(0)
-        return Run(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool),
-                   counts=dict(detector.counts), carried=detector.carried_load)
+        return Run(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool), releases=releases,
+                   events=contact_events, counts=dict(detector.counts),
+                   carried=detector.carried_load)
     return Run(t=np.concatenate([b.t for b in blocks]), p=np.concatenate([b.p for b in blocks]),
                contact=np.concatenate([b.contact for b in blocks]),
                valid=np.concatenate([b.valid for b in blocks]),
-               releases=[r for b in blocks for r in b.releases],
-               events=[e for b in blocks for e in b.events], counts=dict(detector.counts),
+               releases=releases, events=contact_events, counts=dict(detector.counts),
                carried=detector.carried_load)
+
+
+def run_both(events: Iterable[Event], *, pair: AudioFallback, in_blocks: bool = True) -> Run:
+    """
+    Both models of ``pair`` decide a recording: the node's default with a multimodal model.
+
+    Each model runs over the whole recording as :func:`run_detector` runs one (in blocks where
+    it can); the release is the earlier of their first releases and the contact events are
+    merged (:func:`~contact_detector.detection.fallback.first_release`,
+    :func:`~contact_detector.detection.fallback.merge_events`): what
+    :class:`~contact_detector.detection.fallback.AudioFallback` gives message by message while
+    the audio keeps coming. The frames are the multimodal model's.
+
+    Parameters
+    ----------
+    events : iterable of Event
+        From :func:`contact_detector.io.sensor_stream.sensor_events`.
+    pair : AudioFallback
+        Fresh, with ``both_decide`` and ``timeout_s`` 0: offline the audio is never waited
+        for, so the F/T-only model never takes over alone.
+    in_blocks : bool
+        As for :func:`run_detector`.
+
+    Returns
+    -------
+    Run
+        With ``released_by``; its counts are the pair's (``ft_*`` for the F/T-only model).
+
+    Raises
+    ------
+    ConfigError
+        ``pair`` does not have both models deciding, or has an audio timeout.
+
+    """
+    if not pair.both_decide or pair.timeout_s > 0:
+        raise ConfigError('offline, two models run only as both deciding with no audio '
+                          f'timeout (both_decide=True, timeout_s=0; got {pair.both_decide}, '
+                          f'{pair.timeout_s:g})')
+    events = list(events)
+    run = _in_blocks(events, detector=pair.primary) if in_blocks else None
+    if run is None:
+        # Something the node drops, restarts or resets on: the audio model's hold-off holds
+        # the F/T-only model too, so the pair goes message by message, as on the node.
+        run = _by_message(events, detector=pair)
+        run.released_by = pair.last_release_by
+        return run
+    # A clean recording: no hold-off, so each model's run is that of the pair.
+    ft = run_detector(events, detector=pair.fallback, in_blocks=in_blocks)
+    released = first_release(run.releases, ft.releases)
+    merged, _ = merge_events(first=run.events, second=ft.events, after=-math.inf,
+                             refractory_s=pair.primary.rule.refractory_s)
+    released_by = None
+    if released:
+        released_by = MULTIMODAL if released[0] in run.releases else FT_ONLY
+        pair.releases, pair.ft_releases = 1, int(released_by == FT_ONLY)
+    return Run(t=run.t, p=run.p, contact=run.contact, valid=run.valid, releases=released,
+               events=merged, counts=pair.counts, carried=run.carried,
+               released_by=released_by)
 
 
 def run_features(events: Iterable[Event], *, extractor: StreamingFeatureExtractor,

@@ -78,6 +78,10 @@ class ParamSpec:
 PARAMS: Sequence[ParamSpec] = (
     ParamSpec('model.path', '', 'Model file (.npz; legacy .joblib or .skops need scikit-learn), '
               'with its .card.json beside it; empty = the shipped models/contact_forest.npz.'),
+    ParamSpec('model.ft_also_decides', False, 'With a model that uses audio: true = the shipped '
+              'F/T-only model models/contact_forest_ft.npz decides beside it, and the first '
+              'release of either is the release (more slow, quiet load transfers caught: soft '
+              'surfaces, fixtures, partial stops; a few more early releases after brushes).'),
     ParamSpec('audio.enabled', True, 'false: no audio subscription (a robot without a '
               'microphone); with model.path empty the shipped F/T-only model '
               'models/contact_forest_ft.npz is loaded. An F/T-only model.path also turns the '
@@ -225,6 +229,7 @@ class NodeConfig:
     """
 
     model_path: str
+    model_ft_also_decides: bool
     audio_enabled: bool
     audio_timeout_s: float
     audio_msg_type: str
@@ -326,7 +331,8 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
     if not v['gripper.joint'].strip():
         raise ConfigError('parameter gripper.joint must not be empty')
     return NodeConfig(
-        model_path=v['model.path'], audio_enabled=v['audio.enabled'],
+        model_path=v['model.path'], model_ft_also_decides=v['model.ft_also_decides'],
+        audio_enabled=v['audio.enabled'],
         audio_timeout_s=v['audio.timeout_s'], audio_msg_type=msg_type,
         audio_sample_rate=v['audio.sample_rate'], audio_channels=v['audio.channels'],
         audio_channel=None if channel < 0 else channel,

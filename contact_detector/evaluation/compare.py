@@ -40,7 +40,8 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
              found: Optional[Dict[Path, Streams]] = None,
              stream: Optional[dict] = None,
              labels: Optional[Dict[Path, List[float]]] = None,
-             make_ft=None, progress: Callable[[Iterable], Iterable] = iter,
+             make_ft=None, make_both=None,
+             progress: Callable[[Iterable], Iterable] = iter,
              log: Callable[[str], None] = lambda _line: None) -> Dict[str, dict]:
     """
     Run every detector on every bag; return per-detector outcomes, summaries, frame reports.
@@ -54,8 +55,9 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
 
     ``make_forest(streams, has_audio=...)`` gives the ``forest`` detector of a recording with or
     without an audio topic (:class:`contact_detector.detection.factory.DetectorFactory`);
-    ``make_ft(streams)`` the ``forest-ft`` one. The models used are passed to ``log`` once
-    each; ``progress`` wraps the list of bags (e.g. a progress bar).
+    ``make_ft(streams)`` the ``forest-ft`` one, ``make_both(streams)`` the ``forest-both`` one
+    (the ``forest`` model with the F/T-only model deciding beside it). The models used
+    are passed to ``log`` once each; ``progress`` wraps the list of bags (e.g. a progress bar).
 
     Returns
     -------
@@ -91,16 +93,20 @@ def evaluate(*, bags: Sequence[Path], detectors: Sequence[str], make_forest, spe
             elif name == 'forest-ft':
                 detector = make_ft(streams) if streams is not None else make_ft()
                 key = (name, True)
+            elif name == 'forest-both':
+                detector = (make_both(streams) if streams is not None
+                            else make_both(has_audio=has_audio))
+                key = (name, has_audio)
             else:
                 detector = make_baseline(name, wrench_rate=wrench_rate,
                                          audio_rate=audio_rate or default_audio_rate)
                 key = None
             if key is not None and key not in announced and hasattr(make_forest, 'describe'):
                 announced.add(key)
-                factory = make_forest if name == 'forest' else make_ft
+                factory = {'forest': make_forest, 'forest-ft': make_ft}.get(name, make_both)
                 where = 'with' if has_audio else 'without'
-                scope = (f'recordings {where} an audio topic' if name == 'forest'
-                         else 'every recording')
+                scope = ('every recording' if name == 'forest-ft'
+                         else f'recordings {where} an audio topic')
                 log(f'{name} on {scope}: {factory.describe(has_audio=has_audio)}')
             run = run_detector(events, detector=detector)
             problem = run.input_problem() if key is not None else None

@@ -29,7 +29,7 @@ measurement window (rates, latency percentiles, counter increases).
 import time
 from typing import Dict, Optional
 
-from contact_detector.detection.fallback import AudioFallback
+from contact_detector.detection.fallback import AudioFallback, FT_ONLY, MULTIMODAL
 from contact_detector.features.resample import rate_mismatch
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import numpy as np
@@ -95,6 +95,10 @@ class DiagnosticsMixin:
             'model_active': (det.active_name if isinstance(det, AudioFallback)
                              else 'audio + F/T' if self.use_audio else 'F/T-only'),
             'fallback_model_id': self.ft_bundle.model_id if self.ft_bundle else 'none',
+            'models_deciding': (' and '.join(FT_ONLY if d.ft_only else MULTIMODAL
+                                             for d in det.deciding)
+                                if isinstance(det, AudioFallback) else
+                                'audio + F/T' if self.use_audio else 'F/T-only'),
             'decision_rule': rule.describe(),
             'armed': str(det.armed),
             'audio_msg_type': cfg.audio_msg_type,

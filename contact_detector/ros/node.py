@@ -213,9 +213,11 @@ class DetectorWiring(DiagnosticsMixin):
         self.bundle = bundle
         # An F/T-only model: no audio subscription, frames are clocked by the wrench stream.
         self.use_audio = not bundle.feature_config.ft_only
-        # audio.timeout_s: the F/T-only model stands in while the audio is silent.
+        # model.ft_also_decides: the F/T-only model decides beside the audio model;
+        # audio.timeout_s: it stands in while the audio is silent.
         self.ft_bundle = (load_bundle(path=default_ft_model_path())
-                          if self.use_audio and cfg.audio_timeout_s > 0 else None)
+                          if self.use_audio and (cfg.model_ft_also_decides
+                                                 or cfg.audio_timeout_s > 0) else None)
         self._audio_class, self._info_class = audio_class, info_class
         self.counts = dict.fromkeys(NODE_COUNTERS, 0)
         self._count_base: Dict[str, int] = {}
@@ -322,10 +324,14 @@ class DetectorWiring(DiagnosticsMixin):
 
     def _log_loaded(self) -> None:
         cfg, rule = self.config, self.detector.rule
+        both = ''
+        if getattr(self.detector, 'both_decide', False):
+            both = (f'; the F/T-only model {self.ft_bundle.model_id} decides too, the first '
+                    'release of either (model.ft_also_decides)')
         self.get_logger().info(
             f'model {self.bundle.model_id} ({self.model_path}); rule {rule.describe()}; '
             f'audio {self._audio_text()}; wrench {cfg.wrench_rate:g} Hz; '
-            f'release {"armed" if self.detector.armed else "disarmed"}')
+            f'release {"armed" if self.detector.armed else "disarmed"}{both}')
 
     def _settings(self, *, rate: float, armed: bool,
                   bundle: Optional[ModelBundle] = None) -> DetectorSettings:
@@ -345,7 +351,8 @@ class DetectorWiring(DiagnosticsMixin):
             fallback = ContactDetector(bundle=self.ft_bundle, settings=self._settings(
                 rate=rate, armed=False, bundle=self.ft_bundle))
             return AudioFallback(primary=detector, fallback=fallback,
-                                 timeout_s=self.config.audio_timeout_s)
+                                 timeout_s=self.config.audio_timeout_s,
+                                 both_decide=self.config.model_ft_also_decides)
         except ConfigError as err:
             raise ConfigError(f'cannot run model {self.bundle.model_id} with audio at {rate:g} '
                               f'Hz and wrench.rate={self.config.wrench_rate:g} Hz: {err}'
@@ -577,6 +584,10 @@ class DetectorWiring(DiagnosticsMixin):
             for line in switches:
                 self.get_logger().info(line)
             switches.clear()
+        # A release can come with no frame: the F/T-only model's, deciding beside the audio
+        # model (model.ft_also_decides), on a message that decided no audio frame.
+        for t in decisions.releases:
+            self._release(t)
         n = len(decisions)
         if n == 0:
             return
@@ -586,8 +597,6 @@ class DetectorWiring(DiagnosticsMixin):
             contact_pub.publish(BOOL_TRUE if contact else BOOL_FALSE)
             probability_pub.publish(write_float32(p))
         self.counts['contact_msgs'] += n
-        for t in decisions.releases:
-            self._release(t)
         done = time.perf_counter()
         latency = done - entry
         self._latency[kind].append(latency)
@@ -632,7 +641,9 @@ class DetectorWiring(DiagnosticsMixin):
             self.gripper_pub.publish(open_gripper_trajectory(
                 joint=cfg.gripper_joint, position=cfg.gripper_position,
                 duration_s=cfg.gripper_duration_s))
-        self.get_logger().info(f'contact at t={t:.3f} s: RELEASE (disarmed until ~/arm)')
+        by = getattr(self.detector, 'last_release_by', None)
+        model = f' by the {by} model' if by else ''
+        self.get_logger().info(f'contact at t={t:.3f} s: RELEASE{model} (disarmed until ~/arm)')
 
     # --- services, clock -------------------------------------------------------------------------
 

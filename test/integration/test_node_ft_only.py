@@ -23,6 +23,8 @@ shipped F/T-only model and refuses a model that needs audio.
 import time
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.factory import DetectorFactory
+from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ConfigError
 from contact_detector.model.shipped import default_ft_model_path, default_model_path
 from contact_detector.model.storage import load_bundle
@@ -213,6 +215,53 @@ def test_audio_stops_halfway_the_node_switches_and_releases_once(context):
         h.spin_for(0.3)
         switched = [m.msg for m in h.logs if 'model switched' in m.msg]
         assert len(switched) == 1 and 'model switched to F/T-only' in switched[0]
+    finally:
+        h.close()
+
+
+def _feed_trial(h, trial, events) -> None:
+    """Publish the trial's messages with /clock ticking, as a robot would."""
+    h.spin_until(lambda: h.audio_pub.get_subscription_count() > 0)
+    for e in events:
+        tick = trial.start_time + np.floor((e.t - trial.start_time) / TICK_S) * TICK_S
+        if h.clock_t is None or tick > h.clock_t + 1e-9:
+            h.set_clock(tick)
+        if e.kind == 'audio':
+            h.send_audio(trial.audio[e.lo:e.hi])
+        else:
+            h.send_wrench(trial.wrench_t[e.lo], trial.force[e.lo], trial.torque[e.lo])
+
+
+@pytest.mark.parametrize('both', [True, False])
+def test_both_models_decide_and_the_first_release_of_either_is_published(context, both):
+    # paper trial 0 of seed 5: the F/T-only model is sure of the contact 5 ms before the audio
+    # model (test_fallback.py); model.ft_also_decides false leaves the audio model alone
+    trial = simulate_trial(seed=5, index=0, condition='paper')
+    events = node_support.trial_events(trial, t_from=trial.onset_t - 2.5,
+                                       t_to=trial.onset_t + 1.0)
+    h = FtHarness(context, name=f'contact_detector_both_{both}',
+                  **{'model.ft_also_decides': both})
+    try:
+        _feed_trial(h, trial, events)
+        counts = h.node.detector_counts()
+        assert counts['releases'] == 1 and [m.data for m in h.release] == [True]
+        assert counts.get('ft_releases', 0) == int(both)
+        h.spin_until(lambda: any('RELEASE' in m.msg for m in h.logs), timeout=5.0)
+        line = next(m.msg for m in h.logs if 'RELEASE' in m.msg)
+        assert ('by the F/T-only model' in line) == both
+        released = float(line.split('t=')[1].split(' s')[0])
+        # the node and the offline tools agree (detect, evaluate: run_both), to the /clock tick
+        # the node stamps audio with on receipt
+        offline = run_detector(
+            [node_support.sensor_event(trial, e) for e in events],
+            detector=DetectorFactory(model=None, audio_enabled=True, settings={}, rule=None,
+                                     ft_also_decides=both)())
+        assert released == pytest.approx(offline.releases[0], abs=TICK_S + 1e-3)
+        assert trial.onset_t < released < trial.onset_t + 0.1
+        deciding = 'audio + F/T and F/T-only' if both else 'audio + F/T'
+        h.spin_until(lambda: any(
+            {kv.key: kv.value for kv in d.status[0].values}.get('models_deciding') == deciding
+            for d in h.diag), timeout=5.0)
     finally:
         h.close()
 

@@ -34,6 +34,7 @@ from contact_detector.cli import sweep as sweep_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.detection import factory
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
+from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError
 from contact_detector.evaluation.baselines import BASELINES, make_baseline
 from contact_detector.evaluation.metrics import (frame_labels, phase_at, score_trial, summarize,
@@ -42,6 +43,7 @@ from contact_detector.evaluation.truth import conditions_of, truth_for
 from contact_detector.io import node_params
 from contact_detector.io.bags import jazzy_typestore, open_reader
 from contact_detector.io.sensor_stream import (AudioEvent, BadEvent, load_events, WrenchEvent)
+from contact_detector.model.shipped import default_ft_model_path
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trial, simulate_trials
 from contact_detector.sim.bag_writer import manifest_entry, write_manifest, write_trial_bag
@@ -218,6 +220,56 @@ def test_detect_equals_the_detector_run_directly(data, all_rows):
     assert releases_of(all_rows, name) == [t for b in blocks for t in b.releases]
 
 
+def test_both_models_deciding_in_detect_and_evaluate_is_the_pair_run_directly(
+        data, all_rows, tmp_path):
+    # model.ft_also_decides: true, as on the node: the shipped F/T-only model decides beside
+    # the model; the frames stay the model's, the release is the first of either
+    params = tmp_path / 'both.yaml'
+    params.write_text('contact_detector_node:\n  ros__parameters:\n    model:\n'
+                      '      ft_also_decides: true\n')
+    rows = detect(tmp_path, data['bags'], args=['--model', data['model'], '--params', params])
+    ft = load_bundle(path=default_ft_model_path())
+    by_model = set()
+    for name in data['trials']:
+        pair = AudioFallback(
+            primary=ContactDetector(bundle=data['bundle'], settings=DetectorSettings()),
+            fallback=ContactDetector(bundle=ft, settings=DetectorSettings()),
+            timeout_s=0.0, both_decide=True)
+        releases = []
+        for e in load_events(data['bags'] / name):       # message by message, as the node
+            if isinstance(e, AudioEvent):
+                d = pair.on_audio(e.samples, stamp=e.stamp, now=e.now)
+            elif isinstance(e, WrenchEvent):
+                d = pair.on_wrench(t=e.t, force=e.force, torque=e.torque, now=e.now)
+            elif isinstance(e, BadEvent):
+                d = pair.drop(kind=e.kind, reason=e.reason, stamp=e.now)
+            else:
+                continue                                    # /contact_truth
+            releases += d.releases
+        mine = [r for r in rows if r['bag'] == name]
+        assert [r['p'] for r in frames_of(mine, name)] == [r['p'] for r in
+                                                           frames_of(all_rows, name)]
+        lines = [r for r in mine if 'event' in r]
+        assert [r['t'] for r in lines] == releases
+        if lines:
+            assert lines[0]['model'] == pair.last_release_by
+            by_model.add(pair.last_release_by)
+        # never later than the model alone
+        alone = releases_of(all_rows, name)
+        assert not alone or (releases and releases[0] <= alone[0])
+    assert by_model == {'audio + F/T', 'F/T-only'}
+    # evaluate: forest-both beside forest; with --params, forest is the pair too
+    report = tmp_path / 'report'
+    assert cli_main.main(['evaluate', str(data['bags']), '--model', str(data['model']),
+                          '--detector', 'forest', '--detector', 'forest-both',
+                          '--report', str(report)]) == 0
+    trials = json.loads((report / 'trials.json').read_text())
+    both = {r['name']: r['release_t'] for r in trials['forest-both']}
+    assert both == {name: (releases_of(rows, name) or [None])[0] for name in data['trials']}
+    assert {r['name']: r['release_t'] for r in trials['forest']} == {
+        name: (releases_of(all_rows, name) or [None])[0] for name in data['trials']}
+
+
 def test_mcap_bag_gives_identical_output(data, all_rows, tmp_path):
     trial = data['trials']['trial_0001']
     bag = write_trial_bag(trial=trial, path=tmp_path / 'mcap' / trial.name, storage='mcap')
@@ -355,7 +407,8 @@ def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
     for file in ('summary.md', 'metrics.json', 'trials.json', 'latency.png'):
         assert (report / file).is_file()
     assert (report / 'latency.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
-    detectors = ('forest', 'forest-ft') + BASELINES       # forest-ft: the shipped F/T-only
+    # forest-ft: the shipped F/T-only model; forest-both: it beside the model
+    detectors = ('forest', 'forest-both', 'forest-ft') + BASELINES
     summary = (report / 'summary.md').read_text()
     table = [line for line in summary.splitlines() if line.startswith('| ')]
     for detector in detectors:

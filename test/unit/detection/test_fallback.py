@@ -12,14 +12,18 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""AudioFallback: the F/T-only model stands in while the audio is silent (shipped models)."""
+"""AudioFallback: the F/T-only model decides beside the audio model and stands in for it."""
 
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.fallback import AudioFallback, FT_ONLY, MULTIMODAL
+from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ConfigError
+from contact_detector.io.sensor_stream import AudioEvent
 from contact_detector.model.shipped import default_ft_model_path, default_model_path
 from contact_detector.model.storage import load_bundle
+from contact_detector.sim.messages import message_events
 from contact_detector.sim.trial import simulate_trial
+import node_support
 import numpy as np
 import pytest
 
@@ -107,6 +111,79 @@ def test_wrong_models_are_refused(bundles):
     det = ContactDetector(bundle=primary, settings=DetectorSettings())
     with pytest.raises(ConfigError, match='F/T-only model as fallback'):
         AudioFallback(primary=det, fallback=det, timeout_s=0.3)
-    with pytest.raises(ConfigError, match='timeout'):
+    with pytest.raises(ConfigError, match='timeout 0'):
         AudioFallback(primary=det, fallback=ContactDetector(
             bundle=ft, settings=DetectorSettings()), timeout_s=0.0)
+    with pytest.raises(ConfigError, match='timeout'):
+        AudioFallback(primary=det, fallback=ContactDetector(
+            bundle=ft, settings=DetectorSettings()), timeout_s=-1.0, both_decide=True)
+
+
+# --- both models decide (model.ft_also_decides) ------------------------------------------------
+
+def _pair(bundles, timeout_s=0.0) -> AudioFallback:
+    primary, ft = bundles
+    return AudioFallback(primary=ContactDetector(bundle=primary, settings=DetectorSettings()),
+                         fallback=ContactDetector(bundle=ft, settings=DetectorSettings()),
+                         timeout_s=timeout_s, both_decide=True)
+
+
+def _one_by_one(pair: AudioFallback, events: list) -> tuple:
+    """Feed the pair message by message, as the node does; its releases and events."""
+    releases, contact_events = [], []
+    for e in events:
+        if isinstance(e, AudioEvent):
+            blocks = [pair.on_audio(e.samples, stamp=e.stamp, now=e.now)]
+        else:
+            blocks = [pair.on_wrench_one(t=float(t), values=[*f, *q], now=e.now)
+                      for t, f, q in zip(e.t, e.force, e.torque)]
+        for d in blocks:
+            releases += d.releases
+            contact_events += d.events
+    d = pair.flush()
+    return releases + d.releases, contact_events + d.events
+
+
+@pytest.mark.parametrize('index, by', [(0, FT_ONLY), (1, MULTIMODAL)])
+def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, index, by):
+    # paper trials of seed 5: in trial 0 the F/T-only model is sure 5 ms before the audio
+    # model, in trial 1 the audio model first
+    trial = simulate_trial(seed=5, index=index, condition='paper')
+    events = [node_support.sensor_event(trial, e) for e in message_events(trial=trial)]
+    alone = [run_detector(events, detector=ContactDetector(bundle=b, settings=DetectorSettings()))
+             for b in bundles]
+    offline = run_detector(events, detector=_pair(bundles))
+    assert offline.released_by == by
+    assert offline.releases == [min(r.releases[0] for r in alone)]
+    assert trial.onset_t < offline.releases[0] < trial.onset_t + 0.1
+    assert offline.counts['releases'] == 1 and offline.counts['ft_releases'] == (by == FT_ONLY)
+    np.testing.assert_array_equal(offline.p, alone[0].p)      # the frames are the audio model's
+    live = _pair(bundles)
+    releases, contact_events = _one_by_one(live, events)
+    assert releases == offline.releases and contact_events == offline.events
+    assert live.last_release_by == by and not live.armed
+    assert not live.primary.armed and not live.fallback.armed     # one release per arming
+    assert live.counts['releases'] == 1 and live.counts['ft_releases'] == (by == FT_ONLY)
+
+
+def test_both_decide_rearms_both_and_offline_refuses_a_timeout(bundles):
+    pair = _pair(bundles)
+    assert pair.armed and pair.fallback.armed and len(pair.deciding) == 2
+    pair.arm(False)
+    assert not pair.primary.armed and not pair.fallback.armed
+    pair.arm(True)
+    assert pair.primary.armed and pair.fallback.armed
+    with pytest.raises(ConfigError, match='timeout'):
+        run_detector([], detector=_pair(bundles, timeout_s=0.3))
+    with pytest.raises(ConfigError, match='without both_decide'):
+        AudioFallback(primary=pair.primary, fallback=pair.fallback, timeout_s=0.0)
+
+
+@pytest.mark.slow
+def test_both_decide_audio_stops_the_ft_model_goes_on_and_releases_once(bundles, trial):
+    fb = _pair(bundles, timeout_s=0.3)
+    stop = trial.onset_t - 1.2            # the audio dies between the two knocks on the hand
+    _, releases, _ = _feed(fb, trial, audio_until=stop)
+    assert fb.switches == 1 and fb.active_name == FT_ONLY and fb.deciding == (fb.fallback,)
+    assert len(releases) == 1 and trial.onset_t < releases[0] <= trial.onset_t + 0.5
+    assert fb.counts['releases'] == 1 and fb.counts['ft_releases'] == 1
