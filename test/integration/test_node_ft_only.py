@@ -234,7 +234,7 @@ def _feed_trial(h, trial, events) -> None:
 
 @pytest.mark.parametrize('both', [True, False])
 def test_both_models_decide_and_the_first_release_of_either_is_published(context, both):
-    # paper trial 0 of seed 5: the F/T-only model is sure of the contact 5 ms before the audio
+    # paper trial 0 of seed 5: the F/T-only model releases 12 ms before the audio
     # model (test_fallback.py); model.ft_also_decides false leaves the audio model alone
     trial = simulate_trial(seed=5, index=0, condition='paper')
     events = node_support.trial_events(trial, t_from=trial.onset_t - 2.5,

@@ -146,8 +146,8 @@ def _one_by_one(pair: AudioFallback, events: list) -> tuple:
 
 @pytest.mark.parametrize('index, by', [(0, FT_ONLY), (1, MULTIMODAL)])
 def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, index, by):
-    # paper trials of seed 5: in trial 0 the F/T-only model is sure 5 ms before the audio
-    # model, in trial 1 the audio model first
+    # paper trials of seed 5: in trial 0 the F/T-only model releases 12 ms before the audio
+    # model, in trial 1 the audio model 8 ms before it
     trial = simulate_trial(seed=5, index=index, condition='paper')
     events = [node_support.sensor_event(trial, e) for e in message_events(trial=trial)]
     alone = [run_detector(events, detector=ContactDetector(bundle=b, settings=DetectorSettings()))
