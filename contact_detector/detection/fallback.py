@@ -275,13 +275,14 @@ class AudioFallback:
         Returns
         -------
         Decisions
-            The frames of every sample, in order, with their releases and events.
+            The frames of every sample, in order, with their releases and events (and the
+            first drop reason, if a sample was dropped).
 
         """
         blocks = [self.on_wrench_one(t=float(ti), values=[*f, *q], now=now)
                   for ti, f, q in zip(np.atleast_1d(t), np.atleast_2d(force),
                                       np.atleast_2d(torque))]
-        blocks = [b for b in blocks if len(b) or b.releases or b.events]
+        blocks = [b for b in blocks if len(b) or b.releases or b.events or b.error]
         if len(blocks) == 1:
             return blocks[0]
         if not blocks:
@@ -291,7 +292,8 @@ class AudioFallback:
                          contact=np.concatenate([b.contact for b in blocks]),
                          valid=np.concatenate([b.valid for b in blocks]),
                          releases=[r for b in blocks for r in b.releases],
-                         events=[e for b in blocks for e in b.events])
+                         events=[e for b in blocks for e in b.events],
+                         error=next((b.error for b in blocks if b.error), None))
 
     def _first_release(self, active: Decisions, other: Decisions) -> Decisions:
         """
