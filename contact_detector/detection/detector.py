@@ -157,6 +157,20 @@ class Decisions:
         """Return a block with no frames (its arrays are shared and read-only)."""
         return cls(t=_NO_FLOATS, p=_NO_FLOATS, contact=_NO_BOOLS, valid=_NO_BOOLS, error=error)
 
+    @classmethod
+    def concat(cls, blocks: Sequence['Decisions']) -> 'Decisions':
+        """Concatenate blocks in order: frames, releases, events, and the first error."""
+        error = next((b.error for b in blocks if b.error), None)
+        kept = [b for b in blocks if len(b)]
+        releases = [r for b in blocks for r in b.releases]
+        events = [e for b in blocks for e in b.events]
+        if not kept:
+            return dataclasses.replace(cls.empty(error), releases=releases, events=events)
+        return cls(t=np.concatenate([b.t for b in kept]), p=np.concatenate([b.p for b in kept]),
+                   contact=np.concatenate([b.contact for b in kept]),
+                   valid=np.concatenate([b.valid for b in kept]), releases=releases,
+                   events=events, error=error)
+
 
 _NO_FLOATS = np.zeros(0)
 _NO_BOOLS = np.zeros(0, dtype=bool)

@@ -235,7 +235,7 @@ class AudioFallback:
                 return Decisions.empty()            # the next frames are the audio model's
         if self.active is not self.primary:
             return Decisions.empty()
-        return self._first_release(decided, Decisions.empty())
+        return self.combine(decided, Decisions.empty())
 
     def on_wrench_one(self, *, t: float, values: Sequence[float],
                       now: Optional[float] = None) -> Decisions:
@@ -256,8 +256,8 @@ class AudioFallback:
                 self._audio_back_t = None
                 return Decisions.empty()            # the next frames are the F/T-only model's
         if self.active is self.primary:
-            return self._first_release(from_primary, from_fallback)
-        return self._first_release(from_fallback, Decisions.empty())
+            return self.combine(from_primary, from_fallback)
+        return self.combine(from_fallback, Decisions.empty())
 
     def on_wrench(self, *, t, force, torque, now: Optional[float] = None) -> Decisions:
         """
@@ -282,28 +282,20 @@ class AudioFallback:
         blocks = [self.on_wrench_one(t=float(ti), values=[*f, *q], now=now)
                   for ti, f, q in zip(np.atleast_1d(t), np.atleast_2d(force),
                                       np.atleast_2d(torque))]
-        blocks = [b for b in blocks if len(b) or b.releases or b.events or b.error]
-        if len(blocks) == 1:
-            return blocks[0]
-        if not blocks:
-            return Decisions.empty()
-        return Decisions(t=np.concatenate([b.t for b in blocks]),
-                         p=np.concatenate([b.p for b in blocks]),
-                         contact=np.concatenate([b.contact for b in blocks]),
-                         valid=np.concatenate([b.valid for b in blocks]),
-                         releases=[r for b in blocks for r in b.releases],
-                         events=[e for b in blocks for e in b.events],
-                         error=next((b.error for b in blocks if b.error), None))
+        return blocks[0] if len(blocks) == 1 else Decisions.concat(blocks)
 
-    def _first_release(self, active: Decisions, other: Decisions) -> Decisions:
+    def combine(self, active: Decisions, other: Decisions) -> Decisions:
         """
         Return the active model's frames with the deciding models' events and first release.
+
+        Called on every message's two blocks, and by
+        :func:`~contact_detector.detection.offline.run_both` on two whole runs.
 
         ``other`` is the F/T-only model's block while both decide (its frames are not
         returned, its contact events and release are). A release disarms every deciding
         model: one release per arming. When both release on the same message the earlier
-        frame time is the release, so the outcome is that of :func:`first_release` over two
-        separate runs, which the offline tools compute.
+        frame time is the release, so the outcome is that of two separate runs combined at
+        once.
         """
         events = list(active.events)
         if self.both_decide and (events or other.events):
@@ -328,8 +320,8 @@ class AudioFallback:
         """Decide the frames still waiting (end of a recording): the active model's."""
         primary, fallback = self.primary.flush(), self.fallback.flush()
         if self.active is self.primary:
-            return self._first_release(primary, fallback)
-        return self._first_release(fallback, Decisions.empty())
+            return self.combine(primary, fallback)
+        return self.combine(fallback, Decisions.empty())
 
     def _switch(self, *, to: ContactDetector, t: float, why: str) -> None:
         old = self.active

@@ -21,12 +21,10 @@ log-time order, audio stamped as the node stamps it.
 """
 
 from dataclasses import dataclass, field
-import math
 from typing import Iterable, List, Optional, Union
 
 from contact_detector.detection.detector import ContactDetector, Decisions
-from contact_detector.detection.fallback import (AudioFallback, first_release, FT_ONLY,
-                                                 merge_events, MULTIMODAL)
+from contact_detector.detection.fallback import AudioFallback
 from contact_detector.errors import ConfigError
 from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.frames import FeatureFrames
@@ -166,19 +164,9 @@ def _by_message(events: Iterable[Event], *,
         elif isinstance(event, BadEvent):
             blocks.append(detector.drop(kind=event.kind, reason=event.reason, stamp=event.now))
     blocks.append(detector.flush())
-    releases = [r for b in blocks for r in b.releases]
-    contact_events = [e for b in blocks for e in b.events]
-    blocks = [b for b in blocks if len(b)]
-    if not blocks:
-        z = np.zeros(0)
-        return Run(t=z, p=z, contact=z.astype(bool), valid=z.astype(bool), releases=releases,
-                   events=contact_events, counts=dict(detector.counts),
-                   carried=detector.carried_load)
-    return Run(t=np.concatenate([b.t for b in blocks]), p=np.concatenate([b.p for b in blocks]),
-               contact=np.concatenate([b.contact for b in blocks]),
-               valid=np.concatenate([b.valid for b in blocks]),
-               releases=releases, events=contact_events, counts=dict(detector.counts),
-               carried=detector.carried_load)
+    d = Decisions.concat(blocks)
+    return Run(t=d.t, p=d.p, contact=d.contact, valid=d.valid, releases=d.releases,
+               events=d.events, counts=dict(detector.counts), carried=detector.carried_load)
 
 
 def run_both(events: Iterable[Event], *, pair: AudioFallback, in_blocks: bool = True) -> Run:
@@ -186,11 +174,9 @@ def run_both(events: Iterable[Event], *, pair: AudioFallback, in_blocks: bool = 
     Both models of ``pair`` decide a recording: the node's default with a multimodal model.
 
     Each model runs over the whole recording as :func:`run_detector` runs one (in blocks where
-    it can); the release is the earlier of their first releases and the contact events are
-    merged (:func:`~contact_detector.detection.fallback.first_release`,
-    :func:`~contact_detector.detection.fallback.merge_events`): what
-    :class:`~contact_detector.detection.fallback.AudioFallback` gives message by message while
-    the audio keeps coming. The frames are the multimodal model's.
+    it can), and :meth:`~contact_detector.detection.fallback.AudioFallback.combine` takes the
+    earlier of their first releases and merges the contact events: what the pair gives message
+    by message while the audio keeps coming. The frames are the multimodal model's.
 
     Parameters
     ----------
@@ -227,16 +213,15 @@ def run_both(events: Iterable[Event], *, pair: AudioFallback, in_blocks: bool = 
         return run
     # A clean recording: no hold-off, so each model's run is that of the pair.
     ft = run_detector(events, detector=pair.fallback, in_blocks=in_blocks)
-    released = first_release(run.releases, ft.releases)
-    merged, _ = merge_events(first=run.events, second=ft.events, after=-math.inf,
-                             refractory_s=pair.primary.rule.refractory_s)
-    released_by = None
-    if released:
-        released_by = MULTIMODAL if released[0] in run.releases else FT_ONLY
-        pair.releases, pair.ft_releases = 1, int(released_by == FT_ONLY)
-    return Run(t=run.t, p=run.p, contact=run.contact, valid=run.valid, releases=released,
-               events=merged, counts=pair.counts, carried=run.carried,
-               released_by=released_by)
+    both = pair.combine(_decisions(run), _decisions(ft))
+    return Run(t=run.t, p=run.p, contact=run.contact, valid=run.valid, releases=both.releases,
+               events=both.events, counts=pair.counts, carried=run.carried,
+               released_by=pair.last_release_by if both.releases else None)
+
+
+def _decisions(run: Run) -> Decisions:
+    return Decisions(t=run.t, p=run.p, contact=run.contact, valid=run.valid,
+                     releases=run.releases, events=run.events)
 
 
 def run_features(events: Iterable[Event], *, extractor: StreamingFeatureExtractor,
