@@ -1,0 +1,161 @@
+# Copyright 2026 contact_detector developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Variants of a shipped model's decision rule, each family left out, with the knocked trials.
+
+    .venv/bin/python benchmarks/lofo_rules.py DIR... [--recipe ft-only|multimodal]
+        [--rule NAME:FIELD=VALUE[,FIELD=VALUE...]]... [--seeds 0,1,2] [--jobs 2]
+        [--families] [--json out.json]
+
+Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
+setting, labels, wrench augmentation and event weight: ``ft-only`` is ``tools/build_ft_model.sh``'s,
+``multimodal`` is ``tools/build_model.sh``'s), one per family left out and per seed, and scores
+on each left-out family the recipe's shipped rule (``S``) and every ``--rule``: the shipped
+rule with the named fields changed (``th90:threshold=0.9``,
+``th80c2st50:threshold=0.8,confirm_frames=2,sustain_threshold=0.5``; any field of
+``DecisionRule``). ``sweep --lofo`` scores a fixed list of rules without the load paths; this
+keeps the recipe's load paths in every variant, as the shipped model decides.
+
+Prints one line per rule: caught within 500 ms and early over all families, the worst family
+(most early releases, then fewest caught), and the trials knocked on the hand while the object
+is in the air (issue #16's safety figure: caught, early, median latency); ``--families`` adds
+one line per family. Every rule is scored with the same forests, so their differences are the
+rule's alone. About 4 minutes per seed on the F/T-only pool of docs/offline.md (360 trials) on
+two cores.
+"""
+
+import argparse
+from dataclasses import fields, replace
+import json
+from pathlib import Path
+import sys
+from typing import Dict, List, Tuple
+
+from contact_detector.evaluation.truth import knocked_in_air
+from contact_detector.io.bags import find_bags
+from contact_detector.io.sensor_stream import StreamSpec
+from contact_detector.model.rule import DecisionRule
+from contact_detector.training.recipe import (DEFAULT_FT_ONLY_RULE, DEFAULT_RULE,
+                                              recipe_defaults)
+from contact_detector.training.studies import lofo_setting
+from contact_detector.training.sweep import compute_frames, decode_bags, leave_one_family_out
+import numpy as np
+
+#: Each recipe's ``sweep --lofo`` setting and shipped rule.
+RECIPES = {
+    'ft-only': ('ft-only+signed+carried+aug', DEFAULT_FT_ONLY_RULE, True),
+    'multimodal': ('shipped+aug', DEFAULT_RULE, False),
+}
+
+
+def parse_rule(text: str, *, base: DecisionRule) -> Tuple[str, DecisionRule]:
+    """
+    Return ``(name, rule)`` for ``NAME:FIELD=VALUE,...``: ``base`` with those fields changed.
+
+    Each value takes the type of the field's value in ``base``; an unknown field or a value of
+    the wrong type is an ``argparse.ArgumentTypeError``.
+    """
+    name, _, changes = text.partition(':')
+    known = {f.name: type(getattr(base, f.name)) for f in fields(base)}
+    values = {}
+    for item in filter(None, changes.split(',')):
+        key, _, value = item.partition('=')
+        if key not in known:
+            raise argparse.ArgumentTypeError(f'{key!r} is not a DecisionRule field')
+        try:
+            values[key] = known[key](value)
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(f'{key}={value!r}: {err}') from err
+    if not name or not values:
+        raise argparse.ArgumentTypeError(f'{text!r}: expected NAME:FIELD=VALUE[,...]')
+    return name, replace(base, **values)
+
+
+def summarise(outcomes: List[dict]) -> Dict[str, object]:
+    """Return the counts of one rule's outcomes: all, per family, the knocked trials."""
+    def count(rows: List[dict]) -> dict:
+        lat = [r['latency'] for r in rows if r['verdict'] == 'detected']
+        return {'trials': len(rows), 'caught': len(lat),
+                'early': sum(r['verdict'] == 'premature' for r in rows),
+                'median_ms': 1000 * float(np.median(lat)) if lat else None,
+                'p95_ms': 1000 * float(np.percentile(lat, 95)) if lat else None}
+    families = sorted({r['family'] for r in outcomes})
+    per_family = {f: count([r for r in outcomes if r['family'] == f]) for f in families}
+    worst = min(families, key=lambda f: (-per_family[f]['early'], per_family[f]['caught']))
+    return {'all': count(outcomes), 'worst': worst, 'families': per_family,
+            'knocked': count([r for r in outcomes if r['knocked']])}
+
+
+def main(argv=None) -> int:
+    """Run the comparison; return the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('folders', nargs='+', type=Path)
+    parser.add_argument('--recipe', choices=sorted(RECIPES), default='ft-only')
+    parser.add_argument('--rule', action='append', default=[],
+                        help='NAME:FIELD=VALUE[,...], the shipped rule with those fields')
+    parser.add_argument('--seeds', default='0,1,2')
+    parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--families', action='store_true', help='one line per family too')
+    parser.add_argument('--json', type=Path, default=None, help='the counts, as JSON')
+    args = parser.parse_args(argv)
+    setting_name, shipped, ft_only = RECIPES[args.recipe]
+    rules = {'S': shipped}
+    for text in args.rule:
+        try:
+            name, rule = parse_rule(text, base=shipped)
+        except argparse.ArgumentTypeError as err:
+            parser.error(f'--rule: {err}')
+        rules[name] = rule
+    recipe = recipe_defaults(ft_only=ft_only)
+    setting, _ = lofo_setting(setting_name, label=recipe.labels)
+    trials = {}
+    for i, folder in enumerate(args.folders):
+        trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
+    common = dict(events_by_trial=trials, config=setting.config, audio_rate=16000.0,
+                  wrench_rate=100.0, jobs=args.jobs, seed=0)
+    frames = compute_frames(augmentation=None, **common)
+    keys = list(frames)
+    fit = list(compute_frames(augmentation=recipe.augmentation, **common).values())
+    outcomes = {name: [] for name in rules}
+    for seed in (int(s) for s in args.seeds.split(',')):
+        for fold in leave_one_family_out(frames=list(frames.values()), setting=setting,
+                                         rules=list(rules.values()), n_estimators=10,
+                                         seed=seed, jobs=args.jobs, fit_frames=fit):
+            test = [frames[k] for k in keys if frames[k].truth.condition == fold.family]
+            for name, row in zip(rules, fold.rows):
+                outcomes[name] += [{'family': fold.family, 'verdict': o.verdict,
+                                    'latency': o.latency_s, 'knocked': knocked_in_air(f.truth)}
+                                   for o, f in zip(row.outcomes, test)]
+        print(f'seed {seed}: every family left out', file=sys.stderr, flush=True)
+    summary = {name: summarise(rows) for name, rows in outcomes.items()}
+    for name, s in summary.items():
+        a, w, k = s['all'], s['families'][s['worst']], s['knocked']
+        median = 'n/a' if k['median_ms'] is None else f"{k['median_ms']:.0f} ms"
+        print(f"{name}: all {a['caught']}/{a['trials']}, {a['early']} early; worst "
+              f"{s['worst']} {w['caught']}/{w['trials']}, {w['early']} early; knocked on the "
+              f"hand {k['caught']}/{k['trials']}, {k['early']} early, {median}")
+        if args.families:
+            for family, f in s['families'].items():
+                print(f"    {family}: {f['caught']}/{f['trials']}, {f['early']} early, "
+                      f"median {f['median_ms'] or 0:.0f} / p95 {f['p95_ms'] or 0:.0f} ms")
+    if args.json:
+        args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
+                                         'summary': summary}, indent=1))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
