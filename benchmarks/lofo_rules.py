@@ -20,10 +20,10 @@ Variants of a shipped model's decision rule, each family left out, with the knoc
         [--families] [--json out.json]
 
 Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
-setting, labels, wrench augmentation and event weight: ``ft-only`` is ``tools/build_ft_model.sh``'s,
-``multimodal`` is ``tools/build_model.sh``'s), one per family left out and per seed, and scores
-on each left-out family the recipe's shipped rule (``S``) and every ``--rule``: the shipped
-rule with the named fields changed (``th90:threshold=0.9``,
+setting, labels, wrench augmentation and event weight: ``ft-only`` is
+``tools/build_ft_model.sh``'s, ``multimodal`` is ``tools/build_model.sh``'s), one per family
+left out and per seed, and scores on each left-out family the recipe's shipped rule (``S``)
+and every ``--rule``: the shipped rule with the named fields changed (``th90:threshold=0.9``,
 ``th80c2st50:threshold=0.8,confirm_frames=2,sustain_threshold=0.5``; any field of
 ``DecisionRule``). ``sweep --lofo`` scores a fixed list of rules without the load paths; this
 keeps the recipe's load paths in every variant, as the shipped model decides.
@@ -124,8 +124,8 @@ def main(argv=None) -> int:
     trials = {}
     for i, folder in enumerate(args.folders):
         trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
-    common = dict(events_by_trial=trials, config=setting.config, audio_rate=16000.0,
-                  wrench_rate=100.0, jobs=args.jobs, seed=0)
+    common = {'events_by_trial': trials, 'config': setting.config, 'audio_rate': 16000.0,
+              'wrench_rate': 100.0, 'jobs': args.jobs, 'seed': 0}
     frames = compute_frames(augmentation=None, **common)
     keys = list(frames)
     fit = list(compute_frames(augmentation=recipe.augmentation, **common).values())
