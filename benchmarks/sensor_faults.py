@@ -15,7 +15,7 @@
 """
 What a broken F/T reading or audio stream 1 s before the contact does to the shipped models.
 
-    .venv/bin/python benchmarks/sensor_faults.py [--trials 24] [--seed 8600]
+    .venv/bin/python benchmarks/sensor_faults.py [--trials 24] [--seed 8600] [--only KIND,...]
     .venv/bin/python benchmarks/sensor_faults.py --scan DIR_OR_BAG...
 
 Simulated trials (``--conditions wide``: the twelve families in turn, the hand holding the
@@ -27,6 +27,9 @@ object) get, 1 s before the contact onset, one of these faults:
   say);
 - ``spike K``: K samples with 3, -2 and 5 kN added to the force (a garbled message);
 - ``frozen K``: K samples repeating the one before (a driver that republishes);
+- ``noise5 K``, ``noise20 K``: K samples with white noise of 5 or 20 N per force axis and a
+  twentieth of it in N m per torque axis added (interference on the sensor's cable, a loose
+  connector);
 - ``audio-zeros MS``, ``audio-silent``: MS milliseconds of digital silence, or silence from
   then on (a muted microphone, an underrun filled with zeros);
 - ``audio-clip MS``, ``audio-dc MS``, ``audio-noise MS``, ``audio-gain30 MS``: the samples
@@ -37,11 +40,16 @@ Each trial is run through :class:`~contact_detector.detection.detector.ContactDe
 the shipped multimodal and F/T-only models, message by message as the node takes them (the
 F/T-only model ignores audio: its audio rows are left out). The output lists, per fault, how
 many trials each model released in before the onset (early), caught within 500 ms, and
-missed. Run it from another checkout (``PYTHONPATH``) to compare code versions.
+missed. ``--only`` keeps the rows of the named kinds (``--only noise5,noise20``). Run it from
+another checkout (``PYTHONPATH``) to compare code versions.
 
 ``--scan`` instead counts, in real or generated recordings, the F/T samples the node would
 leave out as placeholders (the first WrenchStamped topic of each bag): how often the rule
-takes a reading for a placeholder on sensors that never send one.
+takes a reading for a placeholder on sensors that never send one. It also prints the largest
+**force jitter** of any recording: the median, over 0.1 s (at least 5 samples), of the length
+of the force's change from one sample to the next, in N. White noise of 5 N per axis gives
+about 11 N at any rate; the largest values in clean recordings say whether a bound on it could
+tell a noisy cable from a real robot (docs/reliability.md).
 """
 
 import argparse
@@ -61,7 +69,8 @@ import numpy as np
 
 BREAKS = (('none', 0), ('zeros', 1), ('zeros', 3), ('zeros', 10), ('zeros', 50),
           ('force-zeros', 10), ('torque-zeros', 10), ('gone', 3), ('gone', 10), ('spike', 1),
-          ('spike', 3), ('frozen', 20), ('audio-zeros', 50), ('audio-zeros', 300),
+          ('spike', 3), ('frozen', 20), ('noise5', 20), ('noise5', 80), ('noise20', 20),
+          ('audio-zeros', 50), ('audio-zeros', 300),
           ('audio-silent', 0), ('audio-clip', 50), ('audio-dc', 500), ('audio-noise', 300),
           ('audio-gain30', 300))
 
@@ -85,6 +94,11 @@ def broken(trial: Trial, *, kind: str, k: int) -> Trial:
         force[span] += np.array([3000.0, -2000.0, 5000.0])
     elif kind == 'frozen':
         force[span], torque[span] = force[j - 1], torque[j - 1]
+    elif kind.startswith('noise'):
+        sigma = float(kind[5:])
+        rng = np.random.default_rng(1)
+        force[span] += rng.normal(0.0, sigma, force[span].shape)
+        torque[span] += rng.normal(0.0, sigma / 20, torque[span].shape)
     return dataclasses.replace(trial, force=force, torque=torque)
 
 
@@ -129,6 +143,7 @@ def scan(paths: Sequence[str]) -> None:
     """Print how many F/T samples of the recordings would be left out as placeholders."""
     bags = find_bags(paths)
     samples = left_out = 0
+    worst = (0.0, None)
     for bag in bags:
         topics = [name for name, kind in topic_types(bag).items() if kind == WRENCH_TYPE]
         if not topics:
@@ -139,10 +154,30 @@ def scan(paths: Sequence[str]) -> None:
         stream = ForceTorqueStream(config=FeatureConfig(), input_rate=100.0)
         stream.push(t=wrench.t, force=wrench.force, torque=wrench.torque)
         samples += wrench.t.size
+        jitter = force_jitter(t=wrench.t, force=wrench.force)
+        if jitter > worst[0]:
+            worst = (jitter, bag)
         left_out += stream.placeholders
         if stream.placeholders:
             print(f'{bag}: {stream.placeholders} of {wrench.t.size}')
     print(f'{len(bags)} recordings, {samples} F/T samples, {left_out} left out as placeholders')
+    if worst[1] is not None:
+        print(f'largest force jitter: {worst[0]:.2f} N ({worst[1]})')
+
+
+def force_jitter(*, t: np.ndarray, force: np.ndarray) -> float:
+    """
+    Return the largest median of ``|F_{i+1} - F_i|`` over 0.1 s windows, N.
+
+    ``t`` (s, shape (n,)) gives the rate; ``force`` is (n, 3) in N. 0 for fewer samples than a
+    window (0.1 s, at least 5 sample-to-sample changes).
+    """
+    steps = np.linalg.norm(np.diff(force, axis=0), axis=1)
+    window = max(5, int(round(0.1 / float(np.median(np.diff(t)))))) if t.size > 1 else 5
+    if steps.size < window:
+        return 0.0
+    return float(np.median(np.lib.stride_tricks.sliding_window_view(steps, window),
+                           axis=1).max())
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -151,7 +186,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--trials', type=int, default=24)
     parser.add_argument('--seed', type=int, default=8600)
     parser.add_argument('--scan', nargs='+', metavar='DIR_OR_BAG')
+    parser.add_argument('--only', default='',
+                        help='comma-separated kinds: only their rows (default: every row)')
     args = parser.parse_args(argv)
+    only = set(filter(None, args.only.split(',')))
+    unknown = only - {kind for kind, _ in BREAKS}
+    if unknown:
+        parser.error(f'--only: unknown kinds {sorted(unknown)}')
     if args.scan:
         scan(args.scan)
         return 0
@@ -163,6 +204,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     print('| broken reading | ' + ' | '.join(models) + ' |')
     print('|---|' + '---|' * len(models))
     for kind, k in BREAKS:
+        if only and kind not in only:
+            continue
         cells = []
         for bundle in models.values():
             if kind.startswith('audio') and bundle.feature_config.ft_only:
