@@ -29,10 +29,10 @@ from contact_detector.detection.detector import ContactDetector, DetectorSetting
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ConfigError, ModelError
 from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, SHIFT_FEATURES
-from contact_detector.io.sensor_stream import WrenchEvent
 from contact_detector.model.bundle import ModelBundle
 import numpy as np
 import pytest
+from wrench_support import held_load, sample_messages
 
 CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
                        extra_features=SHIFT_FEATURES + CARRIED_FEATURES)
@@ -60,12 +60,7 @@ def _events(*, ramp_s: float = 1.5, knock: bool = False, push: bool = False,
     sideways (3 N along x over ``ramp_s``) instead of the table; ``tared``: the sensor was
     zeroed with the object in the hand, so it reads no carried load.
     """
-    rng = np.random.default_rng(1)
-    n = int(6.0 * RATE)
-    t = T0 + np.arange(n) / RATE
-    force = rng.normal(scale=0.02, size=(n, 3))
-    torque = rng.normal(scale=0.002, size=(n, 3))
-    force[:, 2] -= 5.0
+    t, force, torque = held_load(seconds=6.0, rate=RATE, t0=T0, seed=1)
     if knock:
         force[(t - T0 >= START_S) & (t - T0 < START_S + 0.03), 2] -= 10.0
     elif push:
@@ -74,8 +69,7 @@ def _events(*, ramp_s: float = 1.5, knock: bool = False, push: bool = False,
         force[:, 2] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
     if tared:
         force[:, 2] += 5.0
-    return [WrenchEvent(t=t[i:i + 1], force=force[i:i + 1], torque=torque[i:i + 1],
-                        now=float(t[i]) + 0.002) for i in range(n)]
+    return sample_messages(t=t, force=force, torque=torque)
 
 
 def _run(bundle, events, *, in_blocks=True, **load):

@@ -25,9 +25,8 @@ from bundle_support import unloading_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.features.config import CARRIED_FEATURES, FeatureConfig, SHIFT_FEATURES
-from contact_detector.io.sensor_stream import WrenchEvent
-import numpy as np
 import pytest
+from wrench_support import held_load, sample_messages
 
 CONFIG = FeatureConfig(audio=False, ft_window=64, ft_detrend='mean', delta_window=1,
                        extra_features=SHIFT_FEATURES + CARRIED_FEATURES)
@@ -42,16 +41,10 @@ def bundle():
 
 def _events(*, gone: float) -> list:
     """Return 5 s of a held 5 N along -z; from 3 s to 3.3 s every value reads ``gone``."""
-    rng = np.random.default_rng(4)
-    n = int(5.0 * RATE)
-    t = T0 + np.arange(n) / RATE
-    force = rng.normal(scale=0.02, size=(n, 3))
-    torque = rng.normal(scale=0.002, size=(n, 3))
-    force[:, 2] -= 5.0
+    t, force, torque = held_load(seconds=5.0, rate=RATE, t0=T0, seed=4)
     force[300:330] = gone           # samples, not stamps: 30 of them
     torque[300:330] = gone
-    return [WrenchEvent(t=t[i:i + 1], force=force[i:i + 1], torque=torque[i:i + 1],
-                        now=float(t[i]) + 0.002) for i in range(n)]
+    return sample_messages(t=t, force=force, torque=torque)
 
 
 @pytest.mark.parametrize('in_blocks', [True, False])
