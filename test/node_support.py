@@ -21,6 +21,7 @@ on features of simulated trials, saved with ``save_bundle``.
 """
 
 from datetime import datetime
+import json
 import os
 from pathlib import Path
 import signal
@@ -160,6 +161,47 @@ def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> int:
             proc.kill()
             return proc.wait()
     return proc.returncode
+
+
+def run_live_trial(*, start: Callable[[list, Path], subprocess.Popen], node_args: list,
+                   tmp_path: Path) -> dict:
+    """
+    Run the node, a listener and a live trial publisher as three processes; return the results.
+
+    ``start(args, log)`` starts ``python ARGS`` (:func:`start_process`, or another Python's);
+    ``node_args`` are the node's (``['-m', 'contact_detector.ros.node', ...]``). The publisher
+    plays a simulated trial at the real rate once the listener is up
+    (``contact_detector.ros.live_trial``), 1.5 s past the onset; the node is stopped with
+    SIGINT after the listener. Returns ``pub`` and ``got`` (the publisher's and the listener's
+    JSON), ``logs`` (``node``, ``listen``, ``pub``) and the exit codes ``node_code``,
+    ``pub_code`` and ``listen_code``.
+    """
+    pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
+                                   tmp_path / 'stop')
+    node = start(node_args, tmp_path / 'node.log')
+    ready = tmp_path / 'listener_ready'
+    listener = start(['-m', 'contact_detector.ros.live_trial', 'listen',
+                      '--out', str(listen_json), '--stop-file', str(stop), '--max-s', '90',
+                      '--ready-file', str(ready)], tmp_path / 'listen.log')
+    publisher = start(['-m', 'contact_detector.ros.live_trial', 'publish', '--out', str(pub_json),
+                       '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
+    try:
+        publisher.wait(timeout=75)
+        time.sleep(0.5)
+        stop.touch()
+        listener.wait(timeout=15)
+    finally:
+        stop.touch()
+        for proc in (publisher, listener):
+            if proc.poll() is None:
+                proc.kill()
+        node_code = stop_process(node)
+    logs = {name: (tmp_path / f'{name}.log').read_text() for name in ('node', 'listen', 'pub')}
+    out = {'logs': logs, 'node_code': node_code, 'pub_code': publisher.returncode,
+           'listen_code': listener.returncode}
+    for key, path in (('pub', pub_json), ('got', listen_json)):
+        out[key] = json.loads(path.read_text()) if path.exists() else None
+    return out
 
 
 def stamp(t: float):

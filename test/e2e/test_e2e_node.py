@@ -23,9 +23,7 @@ records ``contact`` and ``release``. The release must come after the true onset,
 latency budget, and be the only one.
 """
 
-import json
 from pathlib import Path
-import time
 
 import node_support
 import pytest
@@ -37,41 +35,18 @@ TEST_DIR = Path(__file__).resolve().parents[1]  # test/: the helper scripts
 LATENCY_BUDGET_S = 0.3
 
 
-_start = node_support.start_process
-_stop = node_support.stop_process
-
-
 def test_release_after_onset_across_processes(model, tmp_path):
-    pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
-                                   tmp_path / 'stop')
     params = TEST_DIR.parent / 'params' / 'contact_detector.yaml'
-    node = _start(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
-                   '-p', f'model.path:={model}'], tmp_path / 'node.log')
-    ready = tmp_path / 'listener_ready'
-    listener = _start(['-m', 'contact_detector.ros.live_trial', 'listen',
-                       '--out', str(listen_json), '--stop-file', str(stop), '--max-s', '90',
-                       '--ready-file', str(ready)],
-                      tmp_path / 'listen.log')
-    publisher = _start(['-m', 'contact_detector.ros.live_trial', 'publish', '--out', str(pub_json),
-                        '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
-    try:
-        publisher.wait(timeout=75)
-        time.sleep(0.5)
-        stop.touch()
-        listener.wait(timeout=15)
-    finally:
-        stop.touch()
-        for proc in (publisher, listener):
-            if proc.poll() is None:
-                proc.kill()
-        node_code = _stop(node)
-    logs = {name: (tmp_path / f'{name}.log').read_text() for name in ('node', 'listen', 'pub')}
-    assert publisher.returncode == 0, logs['pub']
-    assert listener.returncode == 0, logs['listen']
-    assert node_code == 0, logs['node']            # SIGINT is a clean shutdown
+    run = node_support.run_live_trial(
+        start=node_support.start_process, tmp_path=tmp_path,
+        node_args=['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params),
+                   '-p', f'model.path:={model}'])
+    logs = run['logs']
+    assert run['pub_code'] == 0, logs['pub']
+    assert run['listen_code'] == 0, logs['listen']
+    assert run['node_code'] == 0, logs['node']            # SIGINT is a clean shutdown
 
-    pub = json.loads(pub_json.read_text())
-    got = json.loads(listen_json.read_text())
+    pub, got = run['pub'], run['got']
     onset = pub['onset_wall']
     in_air = [i['t_wall'] for i in pub['impacts'] if i['in_air'] and i['t_wall'] < onset]
     assert in_air, 'the trial must have exogenous impacts in the air before the contact'

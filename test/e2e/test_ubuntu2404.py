@@ -28,7 +28,6 @@ import json
 import os
 from pathlib import Path
 import subprocess
-import time
 
 import node_support
 import pytest
@@ -73,36 +72,16 @@ print(json.dumps({'versions': {n: md.version(n) for n in %r},
 
 @needs_noble
 def test_node_detects_a_live_trial_with_the_shipped_model(tmp_path: Path) -> None:
-    pub_json, listen_json, stop = (tmp_path / 'pub.json', tmp_path / 'listen.json',
-                                   tmp_path / 'stop')
     params = REPO / 'params' / 'contact_detector.yaml'
-    node = _noble(['-m', 'contact_detector.ros.node', '--ros-args', '--params-file',
-                   str(params)], tmp_path / 'node.log')
-    ready = tmp_path / 'listener_ready'
-    listener = _noble(['-m', 'contact_detector.ros.live_trial', 'listen',
-                       '--out', str(listen_json), '--stop-file', str(stop), '--max-s', '90',
-                       '--ready-file', str(ready)],
-                      tmp_path / 'listen.log')
-    publisher = _noble(['-m', 'contact_detector.ros.live_trial', 'publish', '--out', str(pub_json),
-                        '--after-onset', '1.5', '--wait-file', str(ready)], tmp_path / 'pub.log')
-    try:
-        publisher.wait(timeout=75)
-        time.sleep(0.5)
-        stop.touch()
-        listener.wait(timeout=15)
-    finally:
-        stop.touch()
-        for proc in (publisher, listener):
-            if proc.poll() is None:
-                proc.kill()
-        node_code = node_support.stop_process(node)
-    logs = {name: (tmp_path / f'{name}.log').read_text() for name in ('node', 'listen', 'pub')}
-    assert publisher.returncode == 0, logs['pub']
-    assert listener.returncode == 0, logs['listen']
-    assert node_code == 0, logs['node']
+    run = node_support.run_live_trial(
+        start=_noble, tmp_path=tmp_path,
+        node_args=['-m', 'contact_detector.ros.node', '--ros-args', '--params-file', str(params)])
+    logs = run['logs']
+    assert run['pub_code'] == 0, logs['pub']
+    assert run['listen_code'] == 0, logs['listen']
+    assert run['node_code'] == 0, logs['node']
     assert 'contact_forest' in logs['node'] and 'FATAL' not in logs['node'], logs['node']
-    pub = json.loads(pub_json.read_text())
-    got = json.loads(listen_json.read_text())
+    pub, got = run['pub'], run['got']
     releases = [t for t, value in got['release'] if value]
     assert len(releases) == 1, (releases, pub['onset_wall'], logs['node'])
     delay = releases[0] - pub['onset_wall']
