@@ -43,15 +43,15 @@ from pathlib import Path
 import sys
 from typing import Dict, List, Tuple
 
+from contact_detector.evaluation.metrics import (Outcome, premature_text, summarize,
+                                                 summarize_by_condition)
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.io.bags import find_bags
-from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.recipe import (DEFAULT_FT_ONLY_RULE, DEFAULT_RULE,
                                               recipe_defaults)
 from contact_detector.training.studies import lofo_setting
-from contact_detector.training.sweep import compute_frames, decode_bags, leave_one_family_out
-import numpy as np
+from contact_detector.training.sweep import leave_one_family_out
+from lofo_frames import load_frames
 
 #: Each recipe's ``sweep --lofo`` setting and shipped rule.
 RECIPES = {
@@ -83,19 +83,23 @@ def parse_rule(text: str, *, base: DecisionRule) -> Tuple[str, DecisionRule]:
     return name, replace(base, **values)
 
 
-def summarise(outcomes: List[dict]) -> Dict[str, object]:
-    """Return the counts of one rule's outcomes: all, per family, the knocked trials."""
-    def count(rows: List[dict]) -> dict:
-        lat = [r['latency'] for r in rows if r['verdict'] == 'detected']
-        return {'trials': len(rows), 'caught': len(lat),
-                'early': sum(r['verdict'] == 'premature' for r in rows),
-                'median_ms': 1000 * float(np.median(lat)) if lat else None,
-                'p95_ms': 1000 * float(np.percentile(lat, 95)) if lat else None}
-    families = sorted({r['family'] for r in outcomes})
-    per_family = {f: count([r for r in outcomes if r['family'] == f]) for f in families}
-    worst = min(families, key=lambda f: (-per_family[f]['early'], per_family[f]['caught']))
-    return {'all': count(outcomes), 'worst': worst, 'families': per_family,
-            'knocked': count([r for r in outcomes if r['knocked']])}
+def summarise(*, outcomes: List[Outcome], knocked: List[Outcome]) -> Dict[str, object]:
+    """
+    Return one rule's figures: ``'by_family'``, ``'worst'`` and ``'knocked'``.
+
+    ``'by_family'`` is :func:`summarize_by_condition` (``'all'`` and one entry per family),
+    ``'worst'`` the family with the most early releases, then the fewest caught, and
+    ``'knocked'`` the :func:`summarize` of the trials knocked on the hand in the air.
+    """
+    by_family = summarize_by_condition(outcomes)
+    families = [f for f in by_family if f != 'all']
+    worst = min(families, key=lambda f: (-by_family[f]['premature'], by_family[f]['detected']))
+    return {'by_family': by_family, 'worst': worst, 'knocked': summarize(knocked)}
+
+
+def counts(summary: Dict[str, object]) -> str:
+    """Return ``'caught/trials, early early'`` of a :func:`summarize` dict."""
+    return f"{summary['detected']}/{summary['trials']}, {summary['premature']} early"
 
 
 def main(argv=None) -> int:
@@ -121,36 +125,37 @@ def main(argv=None) -> int:
         rules[name] = rule
     recipe = recipe_defaults(ft_only=ft_only)
     setting, _ = lofo_setting(setting_name, label=recipe.labels)
-    trials = {}
-    for i, folder in enumerate(args.folders):
-        trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
-    common = {'events_by_trial': trials, 'config': setting.config, 'audio_rate': 16000.0,
-              'wrench_rate': 100.0, 'jobs': args.jobs, 'seed': 0}
-    frames = compute_frames(augmentation=None, **common)
+    frames = load_frames(folders=args.folders, config=setting.config, cache=None,
+                         jobs=args.jobs)
     keys = list(frames)
-    fit = list(compute_frames(augmentation=recipe.augmentation, **common).values())
+    fit = list(load_frames(folders=args.folders, config=setting.config, cache=None,
+                           jobs=args.jobs, augmentation=recipe.augmentation).values())
     outcomes = {name: [] for name in rules}
+    knocked = {name: [] for name in rules}
     for seed in (int(s) for s in args.seeds.split(',')):
         for fold in leave_one_family_out(frames=list(frames.values()), setting=setting,
                                          rules=list(rules.values()), n_estimators=10,
                                          seed=seed, jobs=args.jobs, fit_frames=fit):
             test = [frames[k] for k in keys if frames[k].truth.condition == fold.family]
             for name, row in zip(rules, fold.rows):
-                outcomes[name] += [{'family': fold.family, 'verdict': o.verdict,
-                                    'latency': o.latency_s, 'knocked': knocked_in_air(f.truth)}
-                                   for o, f in zip(row.outcomes, test)]
+                outcomes[name] += row.outcomes
+                knocked[name] += [o for o, f in zip(row.outcomes, test)
+                                  if knocked_in_air(f.truth)]
         print(f'seed {seed}: every family left out', file=sys.stderr, flush=True)
-    summary = {name: summarise(rows) for name, rows in outcomes.items()}
-    for name, s in summary.items():
-        a, w, k = s['all'], s['families'][s['worst']], s['knocked']
-        median = 'n/a' if k['median_ms'] is None else f"{k['median_ms']:.0f} ms"
-        print(f"{name}: all {a['caught']}/{a['trials']}, {a['early']} early; worst "
-              f"{s['worst']} {w['caught']}/{w['trials']}, {w['early']} early; knocked on the "
-              f"hand {k['caught']}/{k['trials']}, {k['early']} early, {median}")
+    summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
+               for name in rules}
+    for name, figures in summary.items():
+        by_family, worst, hit = figures['by_family'], figures['worst'], figures['knocked']
+        median = ('n/a' if hit['latency_ms_median'] is None
+                  else f"{hit['latency_ms_median']:.0f} ms")
+        print(f"{name}: all {counts(by_family['all'])}; worst {worst} "
+              f'{counts(by_family[worst])}; knocked on the hand {counts(hit)}, {median}')
         if args.families:
-            for family, f in s['families'].items():
-                print(f"    {family}: {f['caught']}/{f['trials']}, {f['early']} early, "
-                      f"median {f['median_ms'] or 0:.0f} / p95 {f['p95_ms'] or 0:.0f} ms")
+            for family, f in by_family.items():
+                if family != 'all':
+                    print(f'    {family}: {counts(f)} ({premature_text(f)}), median '
+                          f"{f['latency_ms_median'] or 0:.0f} / p95 "
+                          f"{f['latency_ms_p95'] or 0:.0f} ms")
     if args.json:
         args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
                                          'summary': summary}, indent=1))

@@ -28,8 +28,8 @@ object) get, 1 s before the contact onset, one of these faults:
 - ``spike K``: K samples with 3, -2 and 5 kN added to the force (a garbled message);
 - ``frozen K``: K samples repeating the one before (a driver that republishes);
 - ``noise5 K``, ``noise20 K``: K samples with white noise of 5 or 20 N per force axis and a
-  twentieth of it in N m per torque axis added (interference on the sensor's cable, a loose
-  connector);
+  twentieth of it in N m per torque axis added, the same draw (seed 1) in every trial
+  (interference on the sensor's cable, a loose connector);
 - ``audio-zeros MS``, ``audio-silent``: MS milliseconds of digital silence, or silence from
   then on (a muted microphone, an underrun filled with zeros);
 - ``audio-clip MS``, ``audio-dc MS``, ``audio-noise MS``, ``audio-gain30 MS``: the samples
