@@ -17,7 +17,7 @@ Variants of a shipped model's decision rule, each family left out, with the knoc
 
     .venv/bin/python benchmarks/lofo_rules.py DIR... [--recipe ft-only|multimodal]
         [--rule NAME:FIELD=VALUE[,FIELD=VALUE...]]... [--seeds 0,1,2] [--jobs 2]
-        [--families] [--json out.json]
+        [--families] [--json out.json] [--splitter best|random]
 
 Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
 setting, labels, wrench augmentation and event weight: ``ft-only`` is
@@ -47,6 +47,7 @@ from contact_detector.evaluation.metrics import (Outcome, premature_text, summar
                                                  summarize_by_condition)
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.model.rule import DecisionRule
+from contact_detector.training.protocol import SPLITTERS
 from contact_detector.training.recipe import (DEFAULT_FT_ONLY_RULE, DEFAULT_RULE,
                                               recipe_defaults)
 from contact_detector.training.studies import lofo_setting
@@ -114,6 +115,9 @@ def main(argv=None) -> int:
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--families', action='store_true', help='one line per family too')
     parser.add_argument('--json', type=Path, default=None, help='the counts, as JSON')
+    parser.add_argument('--splitter', choices=SPLITTERS, default='best',
+                        help="the forests' trees: 'best' (the shipped random forests) or "
+                             "'random' (extremely randomized trees)")
     args = parser.parse_args(argv)
     setting_name, shipped, ft_only = RECIPES[args.recipe]
     rules = {'S': shipped}
@@ -135,7 +139,8 @@ def main(argv=None) -> int:
     for seed in (int(s) for s in args.seeds.split(',')):
         for fold in leave_one_family_out(frames=list(frames.values()), setting=setting,
                                          rules=list(rules.values()), n_estimators=10,
-                                         seed=seed, jobs=args.jobs, fit_frames=fit):
+                                         seed=seed, jobs=args.jobs, fit_frames=fit,
+                                         splitter=args.splitter):
             test = [frames[k] for k in keys if frames[k].truth.condition == fold.family]
             for name, row in zip(rules, fold.rows):
                 outcomes[name] += row.outcomes

@@ -63,7 +63,7 @@ from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
-from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
+from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow, SPLITTERS
 from contact_detector.training.recipe import DEFAULT_RULE, NO_AUDIO_RATE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE,
@@ -145,6 +145,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
                         help='--lofo: fewest training frames in a leaf of every forest '
                              "(default 1, the paper's fully grown trees)")
+    parser.add_argument('--splitter', choices=SPLITTERS, default='best',
+                        help="--lofo: how the trees split: 'best' (default, random forests) "
+                             "or 'random' (extremely randomized trees)")
     add_augmentation_arguments(parser, defaults=STUDY_AUGMENTATION)
     parser.add_argument('--lofo-label-start', type=float, default=STATE.start_s,
                         help='--lofo: frames from this long after the onset are labelled '
@@ -229,7 +232,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 trials=trials, settings=args.lofo_settings.split(','),
                 label=label, trees=args.trees, seed=args.seed, seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
-                families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
+                splitter=args.splitter, families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
                 jobs=args.jobs, load=args.load,
                 progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         except ContactDetectorError as err:

@@ -51,7 +51,7 @@ from contact_detector.evaluation.truth import conditions_of
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import Streams
 from contact_detector.model.storage import save_bundle
-from contact_detector.training.protocol import labels_for
+from contact_detector.training.protocol import labels_for, SPLITTERS
 from contact_detector.training.recipe import (NO_AUDIO_RATE, SIM_CONDITIONS, sim_parts,
                                               simulated_trials, train_model, training_sources)
 from contact_detector.training.report import write_report
@@ -96,6 +96,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
                         help='fewest training frames in a leaf of every forest (default 1, the '
                              "paper's: fully grown trees, pure leaves)")
+    parser.add_argument('--splitter', choices=SPLITTERS, default='best',
+                        help="how the trees split: 'best' (default, a random forest, the "
+                             "paper's) or 'random' (extremely randomized trees; "
+                             'docs/model.md)')
     add_stream_arguments(parser)
     parser.add_argument('--no-events', action='store_true',
                         help='skip the event metrics on the test trials')
@@ -178,7 +182,7 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             sources=sources, config=config, labels=labels, rule=rule, trees=args.trees,
             seed=args.seed, jobs=args.jobs, events=not args.no_events,
             augmentation=(augmentation_from_args(args) if args.augment else None),
-            min_samples_leaf=args.min_samples_leaf,
+            min_samples_leaf=args.min_samples_leaf, splitter=args.splitter,
             created=datetime.now(timezone.utc).isoformat(timespec='seconds'),
             progress=lambda items, desc: tqdm(items, desc=desc, unit='bag'), step=step,
             log=print)

@@ -103,13 +103,15 @@ def forest_problem(forest: Any, n_features: int) -> Optional[str]:
                     f'{n_features}')
         return None
     if 'sklearn' not in sys.modules:  # not a scikit-learn object either
+        return (f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier, '
+                'ExtraTreesClassifier or ForestArrays')
+    # both hold the same tree arrays (training's ``splitter``: 'best' or 'random')
+    from sklearn.ensemble import ExtraTreesClassifier, RandomForestClassifier
+    if not isinstance(forest, (RandomForestClassifier, ExtraTreesClassifier)):
         return (f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier '
-                'or ForestArrays')
-    from sklearn.ensemble import RandomForestClassifier
-    if not isinstance(forest, RandomForestClassifier):
-        return f'the classifier is a {type(forest).__name__}, not a RandomForestClassifier'
+                'or ExtraTreesClassifier')
     if not getattr(forest, 'estimators_', None):
-        return 'the RandomForestClassifier is not fitted'
+        return f'the {type(forest).__name__} is not fitted'
     classes = np.asarray(forest.classes_).tolist()
     if forest.n_outputs_ != 1 or classes != [0, 1]:
         return f'the forest must have classes [0, 1] (1 = contact), it has {classes}'

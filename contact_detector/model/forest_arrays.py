@@ -308,7 +308,8 @@ class ForestArrays:
     @classmethod
     def from_sklearn(cls, forest: Any) -> 'ForestArrays':
         """
-        Copy the trees of a fitted binary ``RandomForestClassifier`` (scikit-learn >= 1.4).
+        Copy the trees of a fitted binary ``RandomForestClassifier`` or
+        ``ExtraTreesClassifier`` (scikit-learn >= 1.4).
 
         Raises
         ------
@@ -320,7 +321,7 @@ class ForestArrays:
         estimators = getattr(forest, 'estimators_', None)
         classes = getattr(forest, 'classes_', None)
         if not estimators or classes is None:
-            raise ModelError(f'expected a fitted RandomForestClassifier, got {type(forest)!r}')
+            raise ModelError(f'expected a fitted scikit-learn forest, got {type(forest)!r}')
         if getattr(forest, 'n_outputs_', 1) != 1 or np.asarray(classes).tolist() != [0, 1]:
             raise ModelError('the forest must be a single-output binary classifier with classes '
                              f'[0, 1] (1 = contact), got classes {np.asarray(classes).tolist()}')

@@ -75,6 +75,9 @@ SKOPS_ALLOWED_TYPES = frozenset({
     'numpy.random.mtrand.RandomState', 'numpy.random._mt19937.MT19937',
     'sklearn.ensemble._forest.RandomForestClassifier',
     'sklearn.tree._classes.DecisionTreeClassifier',
+    # extremely randomized trees (train --splitter random)
+    'sklearn.ensemble._forest.ExtraTreesClassifier',
+    'sklearn.tree._classes.ExtraTreeClassifier',
     'sklearn.tree._tree.Tree',
 })
 
@@ -349,7 +352,8 @@ def load_bundle(*, path: Path, expected_config: Optional[FeatureConfig] = None,
        skops: every type in the file is in :data:`SKOPS_ALLOWED_TYPES` or
        ``trusted_skops_types``;
     5. the file's own metadata equals the card's; the forest has ``len(feature_names)``
-       inputs (a fitted ``RandomForestClassifier`` with classes ``[0, 1]`` for joblib/skops).
+       inputs (a fitted ``RandomForestClassifier`` or ``ExtraTreesClassifier`` with classes
+       ``[0, 1]`` for joblib/skops).
 
     Only joblib and skops import scikit-learn (and joblib/skops); npz needs numpy alone.
 

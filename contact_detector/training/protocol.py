@@ -532,7 +532,22 @@ def check_min_samples_leaf(value: Any) -> int:
     return int(value)
 
 
-def make_forest(*, n_estimators: int, seed: int, jobs: int, min_samples_leaf: int = 1) -> Any:
+#: How a forest's trees choose their split thresholds (``make_forest(splitter=...)``):
+#: ``'best'``, the best threshold among the training frames' values (a random forest, the
+#: paper's), or ``'random'``, one threshold drawn at random per candidate feature (extremely
+#: randomized trees, Geurts et al. 2006; docs/decisions/2026-11-29-extremely-randomized-trees.md).
+SPLITTERS = ('best', 'random')
+
+
+def check_splitter(value: Any) -> str:
+    """Return ``value`` if it is one of :data:`SPLITTERS`, else raise ConfigError."""
+    if value not in SPLITTERS:
+        raise ConfigError(f"splitter must be one of {', '.join(SPLITTERS)}, got {value!r}")
+    return str(value)
+
+
+def make_forest(*, n_estimators: int, seed: int, jobs: int, min_samples_leaf: int = 1,
+                splitter: str = 'best') -> Any:
     """
     Return the unfitted forest of the protocol: the one place every training path builds it.
 
@@ -545,23 +560,30 @@ def make_forest(*, n_estimators: int, seed: int, jobs: int, min_samples_leaf: in
     min_samples_leaf : int
         Fewest training frames in a leaf (:func:`check_min_samples_leaf`); 1 = the paper's
         fully grown trees.
+    splitter : str
+        ``'best'`` (the paper's random forest: bootstrap samples, each split at the best
+        threshold) or ``'random'`` (extremely randomized trees: every frame, each split at
+        the best of one random threshold per candidate feature); :data:`SPLITTERS`.
 
     Returns
     -------
-    sklearn.ensemble.RandomForestClassifier
-        ``max_features = 'sqrt'``, everything else scikit-learn's defaults.
+    sklearn.ensemble.RandomForestClassifier or sklearn.ensemble.ExtraTreesClassifier
+        ``max_features = 'sqrt'``, everything else scikit-learn's defaults. Both hold the
+        same tree arrays, so the model file and the detector do not depend on the choice.
 
     Raises
     ------
     ConfigError
-        ``min_samples_leaf`` is not an integer >= 1.
+        ``min_samples_leaf`` is not an integer >= 1, or ``splitter`` is unknown.
 
     """
     leaf = check_min_samples_leaf(min_samples_leaf)
+    kind = check_splitter(splitter)
     # scikit-learn is imported by training only (the detector runs on numpy arrays).
-    from sklearn.ensemble import RandomForestClassifier
-    return RandomForestClassifier(n_estimators=n_estimators, max_features='sqrt',
-                                  min_samples_leaf=leaf, random_state=seed, n_jobs=jobs)
+    from sklearn.ensemble import ExtraTreesClassifier, RandomForestClassifier
+    forest = RandomForestClassifier if kind == 'best' else ExtraTreesClassifier
+    return forest(n_estimators=n_estimators, max_features='sqrt', min_samples_leaf=leaf,
+                  random_state=seed, n_jobs=jobs)
 
 
 @dataclass
@@ -611,7 +633,7 @@ def split_indices(*, kind: str, y: np.ndarray, groups: np.ndarray,
 def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
               trial_names: Sequence[str], seed: int, jobs: int,
               n_range: Sequence[int] = range(1, 11), min_samples_leaf: int = 1,
-              sample_weight: Optional[np.ndarray] = None,
+              splitter: str = 'best', sample_weight: Optional[np.ndarray] = None,
               progress: Optional[Callable[[str], None]] = None) -> SplitResult:
     """
     Run the paper's protocol on one split kind; the returned forest is refit on train + val.
@@ -632,7 +654,7 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
         Random seed; joblib workers for the forests.
     n_range : sequence of int
         Candidate ``n_estimators``.
-    min_samples_leaf : int
+    min_samples_leaf, splitter
         Of every forest (:func:`make_forest`).
     sample_weight : np.ndarray, shape (n,), optional
         Training weight of each frame (:meth:`LabelWindow.weights`) in every fit; None = 1.
@@ -649,7 +671,7 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     BagError
         The labelled frames hold one class only.
     ConfigError
-        ``min_samples_leaf`` is not an integer >= 1.
+        ``min_samples_leaf`` is not an integer >= 1, or ``splitter`` is unknown.
 
     """
     from sklearn.metrics import (accuracy_score, classification_report, confusion_matrix,
@@ -657,10 +679,11 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
     check_min_samples_leaf(min_samples_leaf)
+    check_splitter(splitter)
 
     def fitted(n, idx):
         forest = make_forest(n_estimators=n, seed=seed, jobs=jobs,
-                             min_samples_leaf=min_samples_leaf)
+                             min_samples_leaf=min_samples_leaf, splitter=splitter)
         return forest.fit(x[idx], y[idx], sample_weight=None if sample_weight is None
                           else sample_weight[idx])
 

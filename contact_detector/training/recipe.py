@@ -43,8 +43,9 @@ from contact_detector.sim.bag_writer import write_trials
 from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
-from contact_detector.training.protocol import (check_min_samples_leaf, LabelWindow, run_split,
-                                                stack_weights, trial_features)
+from contact_detector.training.protocol import (check_min_samples_leaf, check_splitter,
+                                                LabelWindow, run_split, stack_weights,
+                                                trial_features)
 import numpy as np
 
 #: Condition sets of the simulated trials ``--with-sim`` adds.
@@ -396,6 +397,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 config: FeatureConfig, labels: LabelWindow, rule: DecisionRule,
                 trees: Sequence[int], seed: int, jobs: int, events: bool, created: str,
                 augmentation: Optional[WrenchAugmentation] = None, min_samples_leaf: int = 1,
+                splitter: str = 'best',
                 progress: Callable[[Iterable, str], Iterable] = lambda items, _desc: items,
                 step: Callable[[str], None] = lambda _message: None,
                 log: Callable[[str], None] = lambda _line: None) -> TrainedModel:
@@ -439,6 +441,10 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
         (:func:`~contact_detector.training.protocol.make_forest`): 1 (the paper's protocol)
         grows the trees until their leaves are pure. The card records it under
         ``training.min_samples_leaf`` (and ``forest.params``).
+    splitter : str
+        How the trees split (:func:`~contact_detector.training.protocol.make_forest`):
+        ``'best'`` (a random forest, the paper's) or ``'random'`` (extremely randomized
+        trees). The card records it under ``training.splitter``.
     progress, step, log
         ``progress(items, desc)`` wraps the bags of a long step, ``step(message)`` is called
         after each forest step, ``log(line)`` receives the summary line.
@@ -448,12 +454,14 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     BagError
         Fewer than :data:`MIN_RECORDINGS` bags.
     ConfigError
-        ``min_samples_leaf`` is not an integer >= 1 (before any feature is computed).
+        ``min_samples_leaf`` is not an integer >= 1, or ``splitter`` is unknown (before any
+        feature is computed).
 
     """
     from joblib import delayed, Parallel  # training only: scikit-learn's dependency
 
     min_samples_leaf = check_min_samples_leaf(min_samples_leaf)
+    splitter = check_splitter(splitter)
 
     bags = list(found)
     if len(bags) < MIN_RECORDINGS:
@@ -487,7 +495,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
     for kind in ('sample', 'trial'):
         results[kind] = run_split(kind=kind, x=x, y=y, groups=groups, trial_names=names,
                                   seed=seed, jobs=jobs, n_range=trees,
-                                  min_samples_leaf=min_samples_leaf,
+                                  min_samples_leaf=min_samples_leaf, splitter=splitter,
                                   sample_weight=weights, progress=step)
     quoted = results['trial']
     metrics = {kind: {'best_n_estimators': r.best_n, 'validation': r.n_table,
@@ -501,7 +509,7 @@ def train_model(*, found: Dict[Path, Streams], user_bags: Sequence[Path],
                 # simulator's manifests; recorded bags add none)
                 'exogenous_events': _event_counts(manifest.get(b, {}) for b in bags),
                 'test_trials': quoted.test_trials, 'seed': seed,
-                'min_samples_leaf': min_samples_leaf,
+                'min_samples_leaf': min_samples_leaf, 'splitter': splitter,
                 # frames weighing labels.event_weight (near a simulated exogenous event)
                 'event_weighted_frames': 0 if weights is None else int((weights != 1).sum()),
                 'augmentation': augmentation.to_dict() if augmentation else None,

@@ -33,7 +33,8 @@ from contact_detector.features.config import (CARRIED_FEATURES, CARRIED_SHIFT_FE
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
-from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow
+from contact_detector.training.protocol import (check_min_samples_leaf, check_splitter,
+                                                LabelWindow)
 from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE, PREVIOUS_RULE
 from contact_detector.training.sweep import (best_row, compute_frames, FeatureSetting,
                                              fit_forest, leave_one_family_out, model_rules,
@@ -279,7 +280,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                trees: int, seed: int, audio_rate: float, wrench_rate: float, jobs: int,
                augmentation: WrenchAugmentation = STUDY_AUGMENTATION,
                seeds: Sequence[int] = (), min_samples_leaf: int = 1,
-               families: Optional[Sequence[str]] = None,
+               splitter: str = 'best', families: Optional[Sequence[str]] = None,
                load: Optional[Dict[str, Any]] = None,
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
@@ -296,8 +297,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     ``seed`` and each trial's name); the left-out family is never augmented. With ``seeds``,
     every fold trains one forest per seed and each family's row pools the outcomes of all of
     them (``n`` trials x ``len(seeds)``), so that two settings are not told apart by one
-    forest's randomness; else one forest of ``seed``. Every forest has ``trees`` trees and
-    ``min_samples_leaf`` (1: fully grown, the paper's) and learns ``label``: the contact
+    forest's randomness; else one forest of ``seed``. Every forest has ``trees`` trees,
+    ``min_samples_leaf`` (1: fully grown, the paper's) and ``splitter`` (``'best'``, random
+    forests; ``'random'``, extremely randomized trees) and learns ``label``: the contact
     frames, the frames left out after them and the weight of the frames near an exogenous
     event (:class:`~.protocol.LabelWindow`).
     ``families`` leaves only those families out in turn (every forest still trains on all the
@@ -307,6 +309,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
+    check_splitter(splitter)
     present = {events_truth[1].condition for events_truth in trials.values()}
     unknown = sorted(set(families or ()) - present)
     if unknown:
@@ -346,7 +349,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                                              fit_frames=(frames_of(config, True) if augmented
                                                          else None),
                                              families=families,
-                                             min_samples_leaf=min_samples_leaf):
+                                             min_samples_leaf=min_samples_leaf,
+                                             splitter=splitter):
                 for k, row in enumerate(fold.rows):
                     pooled.setdefault((k, fold.family), []).extend(row.outcomes)
                     # the fold's test trials are its family's frames, in order
@@ -375,7 +379,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                                f'{total}/{trials_n} / {early} | '
                                f"{kn['detected']}/{kn['trials']} / {kn['premature']} / "
                                f"{_ms(kn['latency_ms_median'])} |")
-    forests = (f'Forests: {trees} trees, min_samples_leaf {min_samples_leaf}, '
+    kind = '' if splitter == 'best' else 'extremely randomized trees, '
+    forests = (f'Forests: {trees} trees, {kind}min_samples_leaf {min_samples_leaf}, '
                f"seeds {', '.join(str(k) for k in (seeds or (seed,)))} (each family's row pools "
                'them).')
     if label.event_weight != 1.0:

@@ -193,11 +193,14 @@ def _columns(setting: FeatureSetting) -> np.ndarray:
 
 
 def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_estimators: int,
-               seed: int, jobs: int, min_samples_leaf: int = 1) -> RandomForestClassifier:
+               seed: int, jobs: int, min_samples_leaf: int = 1,
+               splitter: str = 'best') -> RandomForestClassifier:
     """
     Train the protocol's forest on the given trials (:func:`~.protocol.make_forest`).
 
-    ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1. The frames
+    ``min_samples_leaf`` 1 = the paper's fully grown trees; ConfigError below 1.
+    ``splitter`` ``'best'`` (a random forest) or ``'random'`` (extremely randomized trees,
+    a scikit-learn ``ExtraTreesClassifier``); ConfigError for anything else. The frames
     near a trial's exogenous events weigh ``setting.label.event_weight``
     (:meth:`~.protocol.LabelWindow.weights`).
     """
@@ -212,7 +215,7 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
                              for f, keep in zip(frames, trained)],
                             sizes=[int(keep.sum()) for keep in trained])
     forest = make_forest(n_estimators=n_estimators, seed=seed, jobs=jobs,
-                         min_samples_leaf=min_samples_leaf)
+                         min_samples_leaf=min_samples_leaf, splitter=splitter)
     return forest.fit(x, y, sample_weight=weights)
 
 
@@ -355,7 +358,8 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
                          rules: Sequence[DecisionRule], n_estimators: int, seed: int,
                          jobs: int, families: Optional[Sequence[str]] = None,
                          fit_frames: Optional[Sequence[TrialFrames]] = None,
-                         min_samples_leaf: int = 1) -> List[FamilyRow]:
+                         min_samples_leaf: int = 1,
+                         splitter: str = 'best') -> List[FamilyRow]:
     """
     Train on all families but one, score every rule on the one left out; once per family.
 
@@ -380,7 +384,7 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
         The frames the forests are trained on (e.g. the same trials augmented), grouped by
         the same families; default ``frames``. The left-out family is always scored on
         ``frames``.
-    min_samples_leaf : int
+    min_samples_leaf, splitter
         Of every fold's forest (as :func:`fit_forest`).
 
     Returns
@@ -398,7 +402,7 @@ def leave_one_family_out(*, frames: Sequence[TrialFrames], setting: FeatureSetti
         if not test or not fit:
             continue
         forest = fit_forest(frames=fit, setting=setting, n_estimators=n_estimators, seed=seed,
-                            jobs=jobs, min_samples_leaf=min_samples_leaf)
+                            jobs=jobs, min_samples_leaf=min_samples_leaf, splitter=splitter)
         out.append(FamilyRow(family=family,
                              rows=score_rules(forest=forest, frames=test, setting=setting,
                                               rules=rules)))

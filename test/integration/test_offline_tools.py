@@ -921,6 +921,32 @@ def test_train_min_samples_leaf_is_recorded_in_the_card_and_bad_values_are_refus
     assert not (tmp_path / 'bad.npz').exists()
 
 
+def test_train_splitter_random_grows_extremely_randomized_trees_that_detect_runs(
+        data, tmp_path, capsys):
+    model = tmp_path / 'extra.npz'
+    bags = str(data['bags'])
+    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '3',
+                           '--splitter', 'random', '--out', str(model)]) == 0
+    bundle = load_bundle(path=model)
+    card = json.loads(model.with_name('extra.card.json').read_text())
+    assert bundle.training['splitter'] == card['training']['splitter'] == 'random'
+    assert data['bundle'].training['splitter'] == 'best'   # the default: the paper's forest
+    # extremely randomized trees grow on every frame, a random forest on bootstrap samples
+    assert card['forest']['params']['bootstrap'] is False
+    assert data['bundle'].trees.params['bootstrap'] is True
+
+    # the model file runs like any other: every trial gets frames, the decisions follow P
+    out = tmp_path / 'extra.jsonl'
+    run_cli('detect', data['bags'], '--model', model, '--out', out)
+    rows = read_jsonl(out)
+    assert {r['bag'] for r in rows} == set(data['trials'])
+    assert any(r.get('event') == 'release' for r in rows)
+    with pytest.raises(SystemExit):
+        train_cli.main([bags, '--splitter', 'extra', '--out', str(tmp_path / 'bad.npz')])
+    assert "invalid choice: 'extra'" in capsys.readouterr().err
+    assert not (tmp_path / 'bad.npz').exists()
+
+
 def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
     bags = str(data['bags'])
     out = tmp_path / 'lofo.md'
@@ -935,6 +961,24 @@ def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
     rows = [[c.strip() for c in line.strip('|').split('|')]
             for line in family_part.splitlines() if line.startswith('| shipped')]
     assert rows and all(r[3].startswith('0/') and r[4].split()[0] == '0' for r in rows)
+
+
+def test_sweep_lofo_splitter_random_trains_other_forests_and_says_so(data, tmp_path):
+    bags = str(data['bags'])
+    tables = {}
+    for splitter in ('best', 'random'):
+        out = tmp_path / f'lofo_{splitter}.md'
+        assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '3',
+                               '--jobs', '1', '--splitter', splitter, '--out', str(out)]) == 0
+        tables[splitter] = out.read_text()
+    assert 'Forests: 3 trees, min_samples_leaf 1, seeds 0' in tables['best']
+    assert ('Forests: 3 trees, extremely randomized trees, min_samples_leaf 1, seeds 0'
+            in tables['random'])
+    # other trees, other P(contact): the per-family rows differ somewhere
+    rows = {k: [line for line in t.split('## Every family')[1].splitlines()
+                if line.startswith('| shipped')] for k, t in tables.items()}
+    assert rows['best'] and len(rows['best']) == len(rows['random'])
+    assert rows['best'] != rows['random']
 
 
 def test_sweep_lofo_event_weight_changes_the_forests_and_says_so(data, tmp_path, capsys):

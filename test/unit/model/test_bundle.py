@@ -31,7 +31,7 @@ import joblib
 import numpy as np
 import pytest
 import sklearn
-from sklearn.ensemble import RandomForestClassifier
+from sklearn.ensemble import ExtraTreesClassifier, RandomForestClassifier
 from sklearn.preprocessing import StandardScaler
 
 CONFIG = FeatureConfig(extra_features=('force_delta',))
@@ -88,9 +88,15 @@ def saved(tmp_path: Path, forest: RandomForestClassifier) -> Path:
 # ---------------------------------------------------------------------------- round trips
 
 @pytest.mark.parametrize('fmt', ['joblib', 'skops'])
-def test_round_trip(tmp_path: Path, forest: RandomForestClassifier, fmt: str) -> None:
+@pytest.mark.parametrize('trees', ['random forest', 'extremely randomized'])
+def test_round_trip(tmp_path: Path, forest: RandomForestClassifier, fmt: str,
+                    trees: str) -> None:
     if fmt == 'skops':
         pytest.importorskip('skops.io')
+    if trees != 'random forest':   # train --splitter random; skops must trust its types too
+        x = np.random.default_rng(2).normal(size=(1500, CONFIG.n_features))
+        forest = ExtraTreesClassifier(n_estimators=4, max_features='sqrt', random_state=0).fit(
+            x, (x[:, 0] > 0.7).astype(int))
     bundle = _bundle(forest)
     path = save_bundle(bundle=bundle, path=tmp_path / 'sub' / f'm.{fmt}', fmt=fmt)
     loaded = load_bundle(path=path, expected_config=CONFIG)

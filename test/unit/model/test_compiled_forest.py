@@ -16,6 +16,7 @@
 
 from contact_detector.errors import InputError, ModelError
 from contact_detector.model.compiled_forest import check_same_as_sklearn, CompiledForest
+from contact_detector.training.protocol import make_forest
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
@@ -54,6 +55,8 @@ def forests() -> dict:
     out['weighted'] = RandomForestClassifier(n_estimators=4, max_features='sqrt',
                                              class_weight='balanced', max_samples=0.5,
                                              random_state=3).fit(x, y)
+    # train --splitter random: random thresholds, not halfway between two training values
+    out['extra'] = make_forest(n_estimators=5, seed=4, jobs=1, splitter='random').fit(x, y)
     return out
 
 
@@ -86,7 +89,7 @@ def _edge_rows(forest: RandomForestClassifier, *, seed: int) -> np.ndarray:
     return np.array(rows)
 
 
-@pytest.mark.parametrize('key', [1, 10, 'weighted'])
+@pytest.mark.parametrize('key', [1, 10, 'weighted', 'extra'])
 def test_batch_and_single_equal_sklearn_on_thousands_of_frames(forests: dict, compiled: dict,
                                                                key: object) -> None:
     x, _ = _data(n=3000, seed=7)
@@ -96,10 +99,10 @@ def test_batch_and_single_equal_sklearn_on_thousands_of_frames(forests: dict, co
     np.testing.assert_array_equal(_bits(compiled[key].predict_proba(x)), _bits(expected))
 
 
-@pytest.mark.parametrize('key', [1, 10])
+@pytest.mark.parametrize('key', [1, 10, 'extra'])
 def test_values_at_thresholds_and_float32_rounding_edges(forests: dict, compiled: dict,
-                                                         key: int) -> None:
-    rows = _edge_rows(forests[key], seed=key)
+                                                         key: object) -> None:
+    rows = _edge_rows(forests[key], seed=key if isinstance(key, int) else 5)
     assert rows.shape[0] > 1000
     expected = forests[key].predict_proba(rows)[:, 1]
     np.testing.assert_array_equal(_bits(compiled[key].predict_proba(rows)), _bits(expected))
