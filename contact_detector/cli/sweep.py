@@ -232,8 +232,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 trials=trials, settings=args.lofo_settings.split(','),
                 label=label, trees=args.trees, seed=args.seed, seeds=args.seeds or (),
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
-                splitter=args.splitter, families=families, audio_rate=audio_rate, wrench_rate=wrench_rate,
-                jobs=args.jobs, load=args.load,
+                splitter=args.splitter, families=families, audio_rate=audio_rate,
+                wrench_rate=wrench_rate, jobs=args.jobs, load=args.load,
                 progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         except ContactDetectorError as err:
             parser.error(str(err))

@@ -308,8 +308,10 @@ class ForestArrays:
     @classmethod
     def from_sklearn(cls, forest: Any) -> 'ForestArrays':
         """
-        Copy the trees of a fitted binary ``RandomForestClassifier`` or
-        ``ExtraTreesClassifier`` (scikit-learn >= 1.4).
+        Copy the trees of a fitted binary scikit-learn forest (scikit-learn >= 1.4).
+
+        A ``RandomForestClassifier`` or an ``ExtraTreesClassifier``: their trees hold the same
+        arrays.
 
         Raises
         ------

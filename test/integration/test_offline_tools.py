@@ -821,17 +821,28 @@ def test_sweep_lofo_scores_the_knocked_trials_and_a_shorter_maximum_window(data,
     assert studies.LOFO_CONFIG_CHANGES['ft-only+signed+max20'] == {'change_max_frames': 20}
 
 
+def _lofo_shipped(data, out: Path, *options: str) -> tuple:
+    """
+    ``sweep --lofo`` of the ``shipped`` setting on the module's trials with ``options``.
+
+    Returns the markdown and its per-family rows (the cells of each ``| shipped`` line of the
+    section "Every family").
+    """
+    assert sweep_cli.main([str(data['bags']), '--lofo', '--lofo-settings', 'shipped',
+                           '--jobs', '1', *options, '--out', str(out)]) == 0
+    text = out.read_text()
+    rows = [[c.strip() for c in line.strip('|').split('|')]
+            for line in text.split('## Every family')[1].splitlines()
+            if line.startswith('| shipped')]
+    return text, rows
+
+
 def test_sweep_lofo_pools_each_family_over_the_forest_seeds(data, tmp_path):
-    bags = str(data['bags'])
     tables = {}
     for seeds in ('3', '3,4'):
-        out = tmp_path / f'lofo{seeds}.md'
-        assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
-                               '--jobs', '1', '--seeds', seeds, '--out', str(out)]) == 0
-        family_part = out.read_text().split('## Every family')[1]
-        tables[seeds] = {(r[1], r[2]): r for r in (
-            [c.strip() for c in line.strip('|').split('|')]
-            for line in family_part.splitlines() if line.startswith('| shipped'))}
+        _, rows = _lofo_shipped(data, tmp_path / f'lofo{seeds}.md', '--trees', '2',
+                                '--seeds', seeds)
+        tables[seeds] = {(r[1], r[2]): r for r in rows}
     per_family = {}
     for t in data['trials'].values():
         per_family[t.condition] = per_family.get(t.condition, 0) + 1
@@ -893,14 +904,18 @@ def test_sweep_keeps_its_augmentation_defaults_while_train_takes_the_shipped_one
     assert recipe.DEFAULT_AUGMENTATION.gain == (0.2, 1.5)
 
 
+def _trained_with(data, model: Path, *options: str) -> tuple:
+    """Train a three-tree model on the module's trials with ``options``; its bundle and card."""
+    assert train_cli.main([str(data['bags']), '--no-events', '--jobs', '1', '--trees', '3',
+                           *options, '--out', str(model)]) == 0
+    card = json.loads(model.with_name(model.stem + '.card.json').read_text())
+    return load_bundle(path=model), card
+
+
 def test_train_min_samples_leaf_is_recorded_in_the_card_and_bad_values_are_refused(
         data, tmp_path, capsys):
-    model = tmp_path / 'leaf.npz'
     bags = str(data['bags'])
-    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '3',
-                           '--min-samples-leaf', '5', '--out', str(model)]) == 0
-    bundle = load_bundle(path=model)
-    card = json.loads(model.with_name('leaf.card.json').read_text())
+    bundle, card = _trained_with(data, tmp_path / 'leaf.npz', '--min-samples-leaf', '5')
     assert bundle.training['min_samples_leaf'] == card['training']['min_samples_leaf'] == 5
     assert card['forest']['params']['min_samples_leaf'] == 5
     assert data['bundle'].training['min_samples_leaf'] == 1   # the default: the paper's
@@ -924,11 +939,7 @@ def test_train_min_samples_leaf_is_recorded_in_the_card_and_bad_values_are_refus
 def test_train_splitter_random_grows_extremely_randomized_trees_that_detect_runs(
         data, tmp_path, capsys):
     model = tmp_path / 'extra.npz'
-    bags = str(data['bags'])
-    assert train_cli.main([bags, '--no-events', '--jobs', '1', '--trees', '3',
-                           '--splitter', 'random', '--out', str(model)]) == 0
-    bundle = load_bundle(path=model)
-    card = json.loads(model.with_name('extra.card.json').read_text())
+    bundle, card = _trained_with(data, model, '--splitter', 'random')
     assert bundle.training['splitter'] == card['training']['splitter'] == 'random'
     assert data['bundle'].training['splitter'] == 'best'   # the default: the paper's forest
     # extremely randomized trees grow on every frame, a random forest on bootstrap samples
@@ -942,41 +953,30 @@ def test_train_splitter_random_grows_extremely_randomized_trees_that_detect_runs
     assert {r['bag'] for r in rows} == set(data['trials'])
     assert any(r.get('event') == 'release' for r in rows)
     with pytest.raises(SystemExit):
-        train_cli.main([bags, '--splitter', 'extra', '--out', str(tmp_path / 'bad.npz')])
+        train_cli.main([str(data['bags']), '--splitter', 'extra',
+                        '--out', str(tmp_path / 'bad.npz')])
     assert "invalid choice: 'extra'" in capsys.readouterr().err
     assert not (tmp_path / 'bad.npz').exists()
 
 
 def test_sweep_lofo_passes_min_samples_leaf_to_every_forest(data, tmp_path):
-    bags = str(data['bags'])
-    out = tmp_path / 'lofo.md'
     # leaves of more frames than the trials hold: every tree is its root, P(contact) is the
     # share of contact frames everywhere, far below every rule's thresholds
-    assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '2',
-                           '--jobs', '1', '--min-samples-leaf', '1000000',
-                           '--out', str(out)]) == 0
-    text = out.read_text()
+    text, rows = _lofo_shipped(data, tmp_path / 'lofo.md', '--trees', '2',
+                               '--min-samples-leaf', '1000000')
     assert 'Forests: 2 trees, min_samples_leaf 1000000, seeds 0' in text
-    family_part = text.split('## Every family')[1]
-    rows = [[c.strip() for c in line.strip('|').split('|')]
-            for line in family_part.splitlines() if line.startswith('| shipped')]
     assert rows and all(r[3].startswith('0/') and r[4].split()[0] == '0' for r in rows)
 
 
 def test_sweep_lofo_splitter_random_trains_other_forests_and_says_so(data, tmp_path):
-    bags = str(data['bags'])
-    tables = {}
+    tables, rows = {}, {}
     for splitter in ('best', 'random'):
-        out = tmp_path / f'lofo_{splitter}.md'
-        assert sweep_cli.main([bags, '--lofo', '--lofo-settings', 'shipped', '--trees', '3',
-                               '--jobs', '1', '--splitter', splitter, '--out', str(out)]) == 0
-        tables[splitter] = out.read_text()
+        tables[splitter], rows[splitter] = _lofo_shipped(
+            data, tmp_path / f'lofo_{splitter}.md', '--trees', '3', '--splitter', splitter)
     assert 'Forests: 3 trees, min_samples_leaf 1, seeds 0' in tables['best']
     assert ('Forests: 3 trees, extremely randomized trees, min_samples_leaf 1, seeds 0'
             in tables['random'])
     # other trees, other P(contact): the per-family rows differ somewhere
-    rows = {k: [line for line in t.split('## Every family')[1].splitlines()
-                if line.startswith('| shipped')] for k, t in tables.items()}
     assert rows['best'] and len(rows['best']) == len(rows['random'])
     assert rows['best'] != rows['random']
 
