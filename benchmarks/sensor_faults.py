@@ -16,6 +16,7 @@
 What a broken F/T reading or audio stream 1 s before the contact does to the shipped models.
 
     .venv/bin/python benchmarks/sensor_faults.py [--trials 24] [--seed 8600] [--only KIND,...]
+        [--ft-rule NAME:FIELD=VALUE,...]...
     .venv/bin/python benchmarks/sensor_faults.py --scan DIR_OR_BAG...
 
 Simulated trials (``--conditions wide``: the twelve families in turn, the hand holding the
@@ -40,8 +41,10 @@ Each trial is run through :class:`~contact_detector.detection.detector.ContactDe
 the shipped multimodal and F/T-only models, message by message as the node takes them (the
 F/T-only model ignores audio: its audio rows are left out). The output lists, per fault, how
 many trials each model released in before the onset (early), caught within 500 ms, and
-missed. ``--only`` keeps the rows of the named kinds (``--only noise5,noise20``). Run it from
-another checkout (``PYTHONPATH``) to compare code versions.
+missed. ``--only`` keeps the rows of the named kinds (``--only noise5,noise20``).
+``--ft-rule NAME:FIELD=VALUE,...`` adds a column: the F/T-only model with those fields of its
+rule changed (``no_hold:load2_threshold=0.0``: without the gated hold), to find the path that
+releases. Run it from another checkout (``PYTHONPATH``) to compare code versions.
 
 ``--scan`` instead counts, in real or generated recordings, the F/T samples the node would
 leave out as placeholders (the first WrenchStamped topic of each bag): how often the rule
@@ -65,6 +68,7 @@ from contact_detector.model.shipped import default_ft_model_path, default_model_
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim.messages import message_events
 from contact_detector.sim.trial import simulate_trials, Trial
+from lofo_rules import parse_rule
 import numpy as np
 
 BREAKS = (('none', 0), ('zeros', 1), ('zeros', 3), ('zeros', 10), ('zeros', 50),
@@ -188,6 +192,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--scan', nargs='+', metavar='DIR_OR_BAG')
     parser.add_argument('--only', default='',
                         help='comma-separated kinds: only their rows (default: every row)')
+    parser.add_argument('--ft-rule', action='append', default=[], metavar='NAME:FIELD=VALUE,...',
+                        help="a column more: the F/T-only model with its rule's fields changed "
+                             '(e.g. no_hold:load2_threshold=0.0); repeatable')
     args = parser.parse_args(argv)
     only = set(filter(None, args.only.split(',')))
     unknown = only - {kind for kind, _ in BREAKS}
@@ -199,6 +206,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     trials = list(simulate_trials(n=args.trials, seed=args.seed, conditions=('wide',)))
     models = {'multimodal': load_bundle(path=default_model_path()),
               'F/T-only': load_bundle(path=default_ft_model_path())}
+    for text in args.ft_rule:
+        shipped = models['F/T-only']
+        try:
+            name, rule = parse_rule(text, base=shipped.decision_rule)
+        except argparse.ArgumentTypeError as err:
+            parser.error(f'--ft-rule: {err}')
+        models[f'F/T-only {name}'] = dataclasses.replace(shipped, decision_rule=rule)
     print(f'{args.trials} trials, --seed {args.seed} --conditions wide; broken 1 s before the '
           'onset; early / caught within 500 ms / missed')
     print('| broken reading | ' + ' | '.join(models) + ' |')

@@ -27,7 +27,9 @@
 # second load path as a gated hold: also release when the force has stayed 2 N from the
 # carried load for 40 frames (0.4 s) with no backing, while it points against the carried load
 # (force_carried_shift_cos <= -0.4) or the sensor is tared (the contacts the forest vetoes:
-# fixtures, pegs, soft surfaces; docs/decisions/2026-11-28-ft-only-direction-gated-hold.md).
+# fixtures, pegs, soft surfaces; docs/decisions/2026-11-28-ft-only-direction-gated-hold.md),
+# and the distances of its newest 10 frames lie within half their median (a steady load, not
+# noise on the reading: docs/decisions/2026-11-29-steady-gated-hold.md).
 # Arm the node while the hand holds the object still (docs/node.md).
 # Writes models/contact_forest_ft.npz (loads with numpy alone), its card (training data,
 # features, labels, rule) and models/report_ft.
@@ -57,7 +59,7 @@ fi
   --threshold 0.95 --confirm-frames 1 --sustain-frames 15 --sustain-threshold 0.4 \
   --load-threshold 2 --load-frames 20 --load-support 0.15 --load-support-frames 25 \
   --load2-threshold 2 --load2-frames 40 --load2-support 0 --load2-support-frames 1 \
-  --load2-direction -0.4 \
+  --load2-direction -0.4 --load2-steady 0.5 \
   --augment --augment-tare 0.5 --augment-torque 0.333,3 \
   --event-weight 1 \
   --trees 10 --out models/contact_forest_ft.npz --report models/report_ft --jobs 2 --seed 0

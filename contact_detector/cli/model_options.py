@@ -22,7 +22,7 @@ import argparse
 from typing import Callable, Optional, Tuple, TypeVar
 
 from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
-from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS, STEADY_FRAMES
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_RULE,
@@ -119,6 +119,12 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
         parser, field='load2',
         help_text="second load path: the load path's test with its own --load2-* distance, "
                   'frames, backing and direction gate')
+    parser.add_argument('--load2-steady', type=float, default=None, metavar='S',
+                        help='the second load path also needs the distances of the newest '
+                             f'{STEADY_FRAMES} frames within max - min <= S x their median, a '
+                             'steady load rather than noise (0 = off; default '
+                             f'{DEFAULT_RULE.load2_steady:g}; with --no-audio '
+                             f'{DEFAULT_FT_ONLY_RULE.load2_steady:g})')
 
 
 def add_load_path_arguments(parser: argparse.ArgumentParser, *, field: str, help_text: str,
@@ -182,7 +188,8 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
     """
     kind = DEFAULT_FT_ONLY_RULE if getattr(args, 'no_audio', False) else DEFAULT_RULE
     load = {name: (getattr(kind, name) if getattr(args, name, None) is None
-                   else getattr(args, name)) for name in LOAD_FIELDS + LOAD2_FIELDS}
+                   else getattr(args, name))
+            for name in LOAD_FIELDS + LOAD2_FIELDS + ('load2_steady',)}
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,

@@ -186,6 +186,10 @@ PARAMS: Sequence[ParamSpec] = (
     ParamSpec('release.load2_direction', -2.0, 'Direction gate of the second load path, as '
               'release.load_direction; below -1 = the decision rule of the model.', -2.0, 1.0,
               read_only=False),
+    ParamSpec('release.load2_steady', -1.0, 'The second load path also needs a steady load: '
+              'the distances of the newest 10 frames within max - min <= this x their median '
+              '(0 = off); negative = the decision rule of the model.', -1.0, 100.0,
+              read_only=False),
     ParamSpec('gripper.enabled', False, 'On release also publish a JointTrajectory that opens '
               'the gripper.'),
     ParamSpec('gripper.topic', '/gripper_controller/joint_trajectory',

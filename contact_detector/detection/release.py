@@ -25,7 +25,7 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 
 from contact_detector.errors import ConfigError
 from contact_detector.features.config import RULE_FEATURES
-from contact_detector.model.rule import DecisionRule
+from contact_detector.model.rule import DecisionRule, STEADY_FRAMES
 import numpy as np
 
 #: Node parameter -> (DecisionRule field, smallest value that overrides the model's rule).
@@ -49,6 +49,7 @@ RULE_PARAMETERS = {
     'release.load2_support': ('load2_support', 0.0),
     'release.load2_support_frames': ('load2_support_frames', 1),
     'release.load2_direction': ('load2_direction', -1.0),
+    'release.load2_steady': ('load2_steady', 0.0),
 }
 
 
@@ -118,6 +119,24 @@ def _gate_passes(gate: float, cos: float) -> bool:
     return gate >= 1.0 or cos <= gate or cos == 0.0
 
 
+def _steady(loads: deque, spread: float) -> bool:
+    """
+    Return whether the newest loads are steady: ``max - min <= spread * median``.
+
+    ``loads`` holds the distances from the carried load (N) of the newest
+    :data:`~contact_detector.model.rule.STEADY_FRAMES` consecutive valid frames; fewer, or a
+    NaN among them, is not steady.
+    """
+    if len(loads) < STEADY_FRAMES:
+        return False
+    if any(math.isnan(v) for v in loads):
+        return False
+    values = sorted(loads)
+    n = len(values)
+    median = values[n // 2] if n % 2 else (values[n // 2 - 1] + values[n // 2]) / 2
+    return values[-1] - values[0] <= spread * median
+
+
 class ReleaseLogic:
     """
     Turn per-frame probabilities into contact decisions and release events.
@@ -139,7 +158,10 @@ class ReleaseLogic:
       ``>= rule.load_support``, or
     - ``rule.load2_threshold > 0`` (the second load path) and the same holds with
       ``rule.load2_threshold``, ``rule.load2_frames``, ``rule.load2_support``,
-      ``rule.load2_support_frames`` and ``rule.load2_direction``.
+      ``rule.load2_support_frames`` and ``rule.load2_direction``, and, with
+      ``rule.load2_steady > 0``, the ``load`` of the newest
+      :data:`~contact_detector.model.rule.STEADY_FRAMES` frames lies within
+      ``max - min <= rule.load2_steady * median`` (a steady load, not noise on the reading).
 
     The means, the evidence and the load runs need consecutive valid, unblocked frames: an
     invalid or blocked frame empties the history, the evidence and the runs. A contact *event*
@@ -163,6 +185,7 @@ class ReleaseLogic:
         self.releases = 0
         self.last_events: list = []
         self._recent: deque = deque()
+        self._loads: deque = deque(maxlen=STEADY_FRAMES)
         self.reset()
 
     def reset(self) -> None:
@@ -173,6 +196,7 @@ class ReleaseLogic:
         self._evidence = 0.0
         self._load_run = 0
         self._load2_run = 0
+        self._loads.clear()
 
     def arm(self, armed: bool) -> None:
         """Allow (True) or forbid (False) the next release."""
@@ -190,6 +214,7 @@ class ReleaseLogic:
         # not >= on the negation: a NaN load never counts
         self._load_run = self._load_run + 1 if load >= rule.load_threshold else 0
         self._load2_run = self._load2_run + 1 if load >= rule.load2_threshold else 0
+        self._loads.append(load)
         if self._mean_of_last(rule.average_frames) >= rule.threshold:
             return True
         if rule.evidence_threshold > 0 and self._evidence >= rule.evidence_threshold:
@@ -200,7 +225,8 @@ class ReleaseLogic:
             return True
         if rule.load2_threshold > 0 and self._load2_run >= rule.load2_frames \
                 and self._mean_of_last(rule.load2_support_frames) >= rule.load2_support \
-                and _gate_passes(rule.load2_direction, cos):
+                and _gate_passes(rule.load2_direction, cos) \
+                and (rule.load2_steady <= 0 or _steady(self._loads, rule.load2_steady)):
             return True
         return rule.sustain_frames > 0 and (
             self._mean_of_last(rule.sustain_frames) >= rule.sustain_threshold)
@@ -304,6 +330,7 @@ class ReleaseLogic:
             self._run = 0
             self._load_run = 0
             self._load2_run = 0
+            self._loads.clear()
             return False
         if not self._is_contact(p, load, cos):
             self._run = 0

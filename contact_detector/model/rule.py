@@ -35,6 +35,8 @@ LOAD_FIELDS = ('load_threshold', 'load_frames', 'load_support', 'load_support_fr
 #: The second load path's fields (written by :meth:`DecisionRule.to_dict` only when it is on).
 LOAD2_FIELDS = ('load2_threshold', 'load2_frames', 'load2_support', 'load2_support_frames',
                 'load2_direction')
+#: Frames over which ``DecisionRule.load2_steady`` judges the load steady (0.1 s at 100 Hz).
+STEADY_FRAMES = 10
 
 
 @dataclass(frozen=True)
@@ -89,6 +91,14 @@ class DecisionRule:
         that long, a knock's push and rebound do not.
     load2_direction : float
         The second load path's direction gate, as ``load_direction`` (1 = off).
+    load2_steady : float
+        The second load path also needs a steady load (0 = off): the distances from the
+        carried load of the newest :data:`STEADY_FRAMES` frames lie within a range of at most
+        ``load2_steady`` times their median, ``max - min <= load2_steady * median``. A load
+        the table took off changes little from frame to frame once it has moved; white noise
+        on the reading (a loose connector) does not: the distance of 5 N per axis ranges over
+        about its median in 10 frames. The shipped F/T-only model uses 0.5
+        (docs/decisions/2026-11-29-steady-gated-hold.md).
 
     """
 
@@ -110,6 +120,7 @@ class DecisionRule:
     load2_support: float = 0.3
     load2_support_frames: int = 5
     load2_direction: float = 1.0
+    load2_steady: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate and normalise; raise :class:`ConfigError` naming the bad field."""
@@ -121,7 +132,8 @@ class DecisionRule:
                                 ('load2_threshold', 0.0, 1000.0),
                                 ('load2_support', 0.0, 1.0),
                                 ('load_direction', -1.0, 1.0),
-                                ('load2_direction', -1.0, 1.0)):
+                                ('load2_direction', -1.0, 1.0),
+                                ('load2_steady', 0.0, 100.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or not low <= value <= high:
@@ -152,6 +164,8 @@ class DecisionRule:
         for path in self._load_paths_on():
             for name, value in zip(path, self._values(path)):
                 text += f' {name}={value:.3f}' if isinstance(value, float) else f' {name}={value}'
+        if self._steady_on():
+            text += f' load2_steady={self.load2_steady:.3f}'
         return text
 
     def short(self) -> str:
@@ -169,7 +183,13 @@ class DecisionRule:
                      f' & mean{support_frames}>={support:g}')
             if direction < 1.0:
                 text += f' & cos<={direction:g}'
+            if path is LOAD2_FIELDS and self._steady_on():
+                text += f' & steady{STEADY_FRAMES}<={self.load2_steady:g}'
         return text
+
+    def _steady_on(self) -> bool:
+        """Return True when the second load path is on and needs a steady load."""
+        return self.load2_threshold > 0 and self.load2_steady > 0
 
     def _load_paths_on(self) -> list:
         """Return the field names of each load path that is on (threshold first)."""
@@ -199,8 +219,9 @@ class DecisionRule:
         """
         Plain-JSON form, stored in bundles and cards.
 
-        Each load path's fields are written only when it is on, so the rules of models written
-        before it existed are stored as they were.
+        Each load path's fields are written only when it is on, and ``load2_steady`` only when
+        the second load path needs a steady load, so the rules of models written before they
+        existed are stored as they were.
         """
         data = dataclasses.asdict(self)
         on = self._load_paths_on()
@@ -208,6 +229,8 @@ class DecisionRule:
             if names not in on:
                 for name in names:
                     del data[name]
+        if not self._steady_on():
+            del data['load2_steady']
         return data
 
     @classmethod

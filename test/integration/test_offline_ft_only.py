@@ -97,8 +97,10 @@ def test_the_second_load_path_from_params_releases_sooner_on_the_same_frames(
     # (the force leaves the carried load as the table takes it) than at its 2 N for 0.4 s
     bag = no_audio / 'trial_0002'
     params = tmp_path / 'fast.yaml'
+    # (and without the model's steady check, which waits for 10 steady frames)
     params.write_text('/**:\n  ros__parameters:\n    release:\n      load2_threshold: 0.5\n'
-                      '      load2_frames: 1\n      load2_support: 0.0\n')
+                      '      load2_frames: 1\n      load2_support: 0.0\n'
+                      '      load2_steady: 0.0\n')
     shipped, fast = tmp_path / 's.jsonl', tmp_path / 'f.jsonl'
     assert cli_main.main(['detect', str(bag), '--out', str(shipped)]) == 0
     assert cli_main.main(['detect', str(bag), '--params', str(params), '--out', str(fast)]) == 0

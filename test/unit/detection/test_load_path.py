@@ -24,7 +24,7 @@ beside the model's columns and gives the forest only its own.
 
 from dataclasses import replace
 
-from bundle_support import lasting_change_bundle
+from bundle_support import lasting_change_bundle, toy_bundle
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.detection.offline import run_detector
 from contact_detector.errors import ConfigError, ModelError
@@ -52,19 +52,23 @@ def bundle() -> ModelBundle:
 
 
 def _events(*, ramp_s: float = 1.5, knock: bool = False, push: bool = False,
-            tared: bool = False) -> list:
+            noise: bool = False, tared: bool = False) -> list:
     """
     Return wrench messages: 5 N held along -z, the table taking 3 N over ``ramp_s`` from 3 s.
 
     ``knock``: a 30 ms, 10 N knock along -z at 3 s instead; ``push``: a hand pushing the object
-    sideways (3 N along x over ``ramp_s``) instead of the table; ``tared``: the sensor was
-    zeroed with the object in the hand, so it reads no carried load.
+    sideways (3 N along x over ``ramp_s``) instead of the table; ``noise``: white noise of 5 N
+    per axis on the reading for 0.8 s from 3 s (a loose connector) instead; ``tared``: the
+    sensor was zeroed with the object in the hand, so it reads no carried load.
     """
     t, force, torque = held_load(seconds=6.0, rate=RATE, t0=T0, seed=1)
     if knock:
         force[(t - T0 >= START_S) & (t - T0 < START_S + 0.03), 2] -= 10.0
     elif push:
         force[:, 0] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
+    elif noise:
+        burst = (t - T0 >= START_S) & (t - T0 < START_S + 0.8)
+        force[burst] += np.random.default_rng(7).normal(scale=5.0, size=(int(burst.sum()), 3))
     else:
         force[:, 2] += 3.0 * np.clip((t - T0 - START_S) / ramp_s, 0.0, 1.0)
     if tared:
@@ -147,3 +151,32 @@ def test_the_direction_gate_tells_the_table_from_a_sideways_push(bundle, in_bloc
     ungated = _run(bundle, pushed, in_blocks=in_blocks, **hold).releases
     assert len(ungated) == 1
     assert _run(bundle, pushed, in_blocks=in_blocks, **gated).releases == ungated
+
+
+@pytest.fixture(scope='module')
+def vetoing_bundle() -> ModelBundle:
+    """Return a toy forest that says contact only for a 1 kN lasting change: only holds release."""
+    rng = np.random.default_rng(0)
+    x = np.abs(rng.normal(size=(2000, CONFIG.n_features)))
+    x[:10, CONFIG.feature_names.index('force_shift_min')] = 1000.0
+    y = (np.arange(2000) < 10).astype(int)
+    return toy_bundle(config=CONFIG, x=x, y=y, created='2026-11-29T00:00:00+00:00')
+
+
+@pytest.mark.parametrize('in_blocks', [True, False])
+def test_a_steady_hold_keeps_noise_on_the_reading_out_and_the_table_in(vetoing_bundle,
+                                                                       in_blocks):
+    bundle = vetoing_bundle
+    # the shipped F/T-only model's gated hold: 2 N for 40 frames, no backing, gated at -0.4
+    hold = {'load2_threshold': 2.0, 'load2_frames': 40, 'load2_support': 0.0,
+            'load2_support_frames': 1, 'load2_direction': -0.4}
+    steady = {**hold, 'load2_steady': 0.5}
+    # 0.8 s of white noise: its distance from the carried load stays above 2 N for 40 frames,
+    # and on a tared sensor the gate has no direction to judge
+    noisy = _events(noise=True, tared=True)
+    assert len(_run(bundle, noisy, in_blocks=in_blocks, **hold).releases) == 1
+    assert _run(bundle, noisy, in_blocks=in_blocks, **steady).releases == []
+    # the table's slow 3 N changes the distance by 0.2 N in 10 frames: the same release
+    table = _run(bundle, _events(), in_blocks=in_blocks, **hold).releases
+    assert table == [pytest.approx(T0 + START_S + 1.0 + 0.4, abs=0.03)]
+    assert _run(bundle, _events(), in_blocks=in_blocks, **steady).releases == table

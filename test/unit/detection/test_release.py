@@ -313,3 +313,33 @@ def test_direction_gate_rule_fields():
                 {'load2_direction': float('nan')}, {'load_direction': True}):
         with pytest.raises(ConfigError, match=next(iter(bad))):
             DecisionRule(**bad)
+
+
+def test_steady_hold_fires_on_a_steady_load_and_not_on_a_noisy_one():
+    hold = replace_rule(GATED_RULE, load_threshold=0.0)     # the gated hold alone
+    steady = replace_rule(hold, load2_steady=0.5)
+    p = [0.35] * 40    # the gated hold's backing (a 5-frame mean of 0.3), nothing more
+    cos = [-0.8] * 40
+    # the same 30 frames 5 N or more from the carried load: steady, or jumping 5-15 N
+    held = [0.0] * 10 + [6.0 + 0.1 * (i % 2) for i in range(30)]
+    noisy = [0.0] * 10 + [5.0 + 10.0 * (i % 2) for i in range(30)]
+    # the gated hold needs 3 frames; the steady check the newest 10 (the held ones from 19)
+    assert _run(hold, p, load=held, cos=cos)[1] == [pytest.approx(12 * HOP)]
+    assert _run(steady, p, load=held, cos=cos)[1] == [pytest.approx(19 * HOP)]
+    assert _run(hold, p, load=noisy, cos=cos)[1] == [pytest.approx(12 * HOP)]
+    assert _run(steady, p, load=noisy, cos=cos)[1] == []
+
+
+def test_steady_rule_field():
+    steady = replace_rule(GATED_RULE, load2_steady=0.5)
+    assert steady.short().endswith(' & cos<=-0.4 & steady10<=0.5')
+    assert DecisionRule.from_dict(steady.to_dict()) == steady
+    assert steady.to_dict()['load2_steady'] == 0.5
+    # off, or on a second load path that is off: stored as rules were before the field
+    assert 'load2_steady' not in GATED_RULE.to_dict()
+    assert 'load2_steady' not in replace_rule(LOAD_RULE, load2_steady=0.5).to_dict()
+    assert rule_overrides({'release.load2_steady': -1.0}) == {}
+    assert rule_overrides({'release.load2_steady': 0.0}) == {'load2_steady': 0.0}
+    for bad in (-0.1, float('nan'), True):
+        with pytest.raises(ConfigError, match='load2_steady'):
+            DecisionRule(load2_steady=bad)
