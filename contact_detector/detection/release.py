@@ -21,6 +21,7 @@ Pure state machine, no ROS, no clock: frame times are passed in.
 from collections import deque
 from itertools import islice, repeat
 import math
+import statistics
 from typing import Any, Dict, Mapping, Optional, Sequence
 
 from contact_detector.errors import ConfigError
@@ -131,10 +132,7 @@ def _steady(loads: deque, spread: float) -> bool:
         return False
     if any(math.isnan(v) for v in loads):
         return False
-    values = sorted(loads)
-    n = len(values)
-    median = values[n // 2] if n % 2 else (values[n // 2 - 1] + values[n // 2]) / 2
-    return values[-1] - values[0] <= spread * median
+    return max(loads) - min(loads) <= spread * statistics.median(loads)
 
 
 class ReleaseLogic:

@@ -679,7 +679,6 @@ def run_split(*, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
     from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
     check_min_samples_leaf(min_samples_leaf)
-    check_splitter(splitter)
 
     def fitted(n, idx):
         forest = make_forest(n_estimators=n, seed=seed, jobs=jobs,
