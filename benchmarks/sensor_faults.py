@@ -47,12 +47,16 @@ rule changed (``no_hold:load2_threshold=0.0``: without the gated hold), to find 
 releases. Run it from another checkout (``PYTHONPATH``) to compare code versions.
 
 ``--scan`` instead counts, in real or generated recordings, the F/T samples the node would
-leave out as placeholders (the first WrenchStamped topic of each bag): how often the rule
-takes a reading for a placeholder on sensors that never send one. It also prints the largest
-**force jitter** of any recording: the median, over 0.1 s (at least 5 samples), of the length
-of the force's change from one sample to the next, in N. White noise of 5 N per axis gives
-about 11 N at any rate; the largest values in clean recordings say whether a bound on it could
-tell a noisy cable from a real robot (docs/reliability.md).
+leave out as placeholders and the grid samples it would call noise (the first WrenchStamped
+topic of each bag, at its own rate, through the detector's F/T stream): how often the checks
+fire on sensors that are fine. It also prints the largest **force jitter** of any recording on
+its raw samples (the median, over 0.1 s, at least 5 samples, of the length of the force's
+change from one sample to the next, N), and the largest **reversing jump** on the 100 Hz
+feature grid: the median jump of a 0.1 s window in which at least 60 % of the changes reverse
+direction (:mod:`contact_detector.features.noise`; the noise check fires from 15 N). White
+noise of 5 N per axis gives a jitter of about 11 N at any rate and a reversing jump of about
+11 N; clean recordings show how far they stay below (docs/reliability.md,
+docs/decisions/2026-12-07-noisy-reading-hold-off.md).
 """
 
 import argparse
@@ -63,6 +67,8 @@ from typing import Optional, Sequence
 from contact_detector.detection.detector import ContactDetector, DetectorSettings
 from contact_detector.features.config import FeatureConfig
 from contact_detector.features.force_torque import ForceTorqueStream
+from contact_detector.features.noise import jump_statistics, REVERSAL_SHARE
+from contact_detector.features.resample import MAX_INPUT_RATE, MIN_INPUT_RATE, WrenchResampler
 from contact_detector.io.bags import find_bags, read_wrench, topic_types, WRENCH_TYPE
 from contact_detector.model.shipped import default_ft_model_path, default_model_path
 from contact_detector.model.storage import load_bundle
@@ -144,29 +150,56 @@ def outcome(trial: Trial, *, bundle) -> str:
 
 
 def scan(paths: Sequence[str]) -> None:
-    """Print how many F/T samples of the recordings would be left out as placeholders."""
+    """Print how many F/T samples of the recordings the node would leave out or call noise."""
     bags = find_bags(paths)
-    samples = left_out = 0
-    worst = (0.0, None)
+    samples = left_out = noisy = 0
+    worst = {'force jitter': (0.0, None), 'reversing jump on the grid': (0.0, None)}
     for bag in bags:
         topics = [name for name, kind in topic_types(bag).items() if kind == WRENCH_TYPE]
         if not topics:
             continue
         wrench = read_wrench(bag, topic=topics[0])
-        # the whole recording in one call: the same samples left out as one per call
-        # (test/unit/features/test_wrench_placeholders.py)
-        stream = ForceTorqueStream(config=FeatureConfig(), input_rate=100.0)
+        if wrench.t.size < 2:
+            continue
+        rate = float(np.clip(1.0 / np.median(np.diff(wrench.t)), MIN_INPUT_RATE,
+                             MAX_INPUT_RATE))
+        # the whole recording in one call: the same samples left out, and the same noisy
+        # ones, as one per call (test_wrench_placeholders.py, test_noise.py)
+        stream = ForceTorqueStream(config=FeatureConfig(), input_rate=rate)
         stream.push(t=wrench.t, force=wrench.force, torque=wrench.torque)
         samples += wrench.t.size
-        jitter = force_jitter(t=wrench.t, force=wrench.force)
-        if jitter > worst[0]:
-            worst = (jitter, bag)
         left_out += stream.placeholders
-        if stream.placeholders:
-            print(f'{bag}: {stream.placeholders} of {wrench.t.size}')
-    print(f'{len(bags)} recordings, {samples} F/T samples, {left_out} left out as placeholders')
-    if worst[1] is not None:
-        print(f'largest force jitter: {worst[0]:.2f} N ({worst[1]})')
+        noisy += stream.noisy
+        if stream.placeholders or stream.noisy:
+            print(f'{bag}: {stream.placeholders} placeholders, {stream.noisy} noisy grid samples '
+                  f'({wrench.t.size} samples)')
+        for name, value in (('force jitter', force_jitter(t=wrench.t, force=wrench.force)),
+                            ('reversing jump on the grid', reversing_jump(
+                                t=wrench.t, force=wrench.force, rate=rate))):
+            if value > worst[name][0]:
+                worst[name] = (value, bag)
+    print(f'{len(bags)} recordings, {samples} F/T samples, {left_out} left out as placeholders, '
+          f'{noisy} grid samples noisy')
+    for name, (value, bag) in worst.items():
+        if bag is not None:
+            print(f'largest {name}: {value:.2f} N ({bag})')
+
+
+def reversing_jump(*, t: np.ndarray, force: np.ndarray, rate: float) -> float:
+    """
+    Return the largest median jump of a window that reverses direction enough to be noise, N.
+
+    The force (``t`` s, shape (n,); ``force`` N, shape (n, 3), at ``rate`` Hz) is resampled
+    onto the 100 Hz feature grid as the detector does, and
+    :func:`~contact_detector.features.noise.jump_statistics` gives each window's median jump
+    and share of reversals; windows with a share of at least
+    :data:`~contact_detector.features.noise.REVERSAL_SHARE` count. 0 when none does.
+    """
+    grid = WrenchResampler(input_rate=rate, output_rate=FeatureConfig().ft_rate_hz)
+    _, values = grid.push(t=t, values=np.concatenate([force, np.zeros_like(force)], axis=1))
+    jump, reversals = jump_statistics(force=values[:, :3])
+    turning = jump[reversals >= REVERSAL_SHARE]
+    return float(turning.max()) if turning.size else 0.0
 
 
 def force_jitter(*, t: np.ndarray, force: np.ndarray) -> float:

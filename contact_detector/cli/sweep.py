@@ -60,11 +60,11 @@ from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import common_rates
 from contact_detector.io.sensor_stream import StreamSpec
-from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS
+from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS, STEADY_FRAMES
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.augmentation import AUGMENTED
 from contact_detector.training.protocol import check_min_samples_leaf, LabelWindow, SPLITTERS
-from contact_detector.training.recipe import DEFAULT_RULE, NO_AUDIO_RATE
+from contact_detector.training.recipe import DEFAULT_FT_ONLY_RULE, DEFAULT_RULE, NO_AUDIO_RATE
 from contact_detector.training.studies import (ablation_study, feature_grid, grid_study,
                                                LOFO_SETTINGS, lofo_study, model_study, STATE,
                                                STUDY_AUGMENTATION)
@@ -194,6 +194,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         help_text='with --load-threshold: the scored rule also has the second load path, the '
                   'same test with its own --load2-* distance, frames, backing and direction '
                   'gate')
+    parser.add_argument('--load2-steady', type=float, default=DecisionRule().load2_steady,
+                        metavar='S',
+                        help='with --load2-threshold: the second load path also needs the '
+                             f'distances of the newest {STEADY_FRAMES} frames within max - min '
+                             '<= S x their median (0 = off, the default; the shipped F/T-only '
+                             f'model: {DEFAULT_FT_ONLY_RULE.load2_steady:g})')
     parser.add_argument('--out', type=Path, default=None, help='markdown table file')
     parser.add_argument('--json', type=Path, default=None, help='all rows as JSON')
     args = parser.parse_args(argv)
@@ -311,12 +317,16 @@ def with_model(args) -> str:
 
 def load_fields(args: argparse.Namespace) -> Optional[dict]:
     """Return the load paths' DecisionRule fields from the options (validated), or None."""
+    if args.load2_steady > 0 and args.load2_threshold <= 0:
+        raise ConfigError('--load2-steady needs --load2-threshold: it is a condition of the '
+                          'second load path')
     if args.load_threshold <= 0:
         if args.load2_threshold > 0:
             raise ConfigError('--load2-threshold needs --load-threshold: the scored rule '
                               'adds both load paths')
         return None
     fields = {name: getattr(args, name) for name in LOAD_FIELDS + LOAD2_FIELDS}
+    fields['load2_steady'] = args.load2_steady
     DecisionRule(**fields)          # ConfigError naming a bad value
     return fields
 

@@ -34,6 +34,7 @@ from contact_detector.features.carried import CarriedLoad
 from contact_detector.features.config import LOAD_DIRECTION_FEATURE, LOAD_FEATURE
 from contact_detector.features.force_torque import bias_vector
 from contact_detector.features.frames import FeatureFrames, TimeJumpError
+from contact_detector.features.noise import NOISE_JUMP_N
 from contact_detector.features.streaming import StreamingFeatureExtractor
 from contact_detector.model.bundle import ModelBundle
 from contact_detector.model.rule import DecisionRule
@@ -79,6 +80,10 @@ class DetectorSettings:
     wrench_bias : tuple of 6 float
         The F/T sensor's zero, subtracted from every wrench sample: force x, y, z in N, then
         torque x, y, z in N m (what the sensor reads with an empty hand).
+    noise_jump_n : float
+        A force reading whose median jump over 0.1 s is at least this (N) while it reverses
+        direction from sample to sample is noise: no frame whose features saw it releases
+        (:mod:`contact_detector.features.noise`); 0 = off.
 
     """
 
@@ -93,6 +98,7 @@ class DetectorSettings:
     rule: Optional[DecisionRule] = None
     audio_rate_tolerance: Optional[float] = 0.2
     wrench_bias: tuple = (0.0,) * 6
+    noise_jump_n: float = NOISE_JUMP_N
 
     def __post_init__(self) -> None:
         """Validate ranges; raise ConfigError naming the field."""
@@ -108,7 +114,8 @@ class DetectorSettings:
         if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol)
                                     and 0 < tol < 1):
             raise ConfigError(f'audio_rate_tolerance must be None or in (0, 1), got {tol!r}')
-        for name in ('max_ft_wait_s', 'max_input_delay_s', 'warmup_s', 'corrupt_holdoff_s'):
+        for name in ('max_ft_wait_s', 'max_input_delay_s', 'warmup_s', 'corrupt_holdoff_s',
+                     'noise_jump_n'):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f'{name} must be a finite number >= 0, got {value!r}')
@@ -260,7 +267,7 @@ class ContactDetector:
     COUNTERS = ('audio_msgs', 'wrench_msgs', 'audio_dropped', 'wrench_dropped', 'time_jumps',
                 'frames', 'invalid_frames', 'stale_frames', 'events', 'releases',
                 'audio_restarts', 'wrench_restarts', 'audio_rate_mismatch', 'nonfinite_frames',
-                'audio_clipped', 'audio_ignored', 'wrench_placeholders')
+                'audio_clipped', 'audio_ignored', 'wrench_placeholders', 'wrench_noise')
 
     def __init__(self, *, bundle: ModelBundle, settings: DetectorSettings) -> None:
         self.bundle = bundle
@@ -284,7 +291,7 @@ class ContactDetector:
             self.extractor = StreamingFeatureExtractor(
                 config=config, audio_rate=settings.audio_rate,
                 ft_input_rate=settings.wrench_rate, max_ft_age_s=settings.max_ft_age_s,
-                max_ft_wait_s=settings.max_ft_wait_s)
+                max_ft_wait_s=settings.max_ft_wait_s, noise_jump_n=settings.noise_jump_n)
         except InputError as err:
             raise ConfigError(f'cannot build the detector: {err}') from err
         self.extractor.ft.set_bias(settings.wrench_bias)    # checked by the settings
@@ -568,6 +575,10 @@ class ContactDetector:
         self.counts['audio_restarts'] = self.extractor.audio.restarts
         self.counts['wrench_restarts'] = self.extractor.ft.restarts
         self.counts['wrench_placeholders'] = self.extractor.ft.placeholders
+        self.counts['wrench_noise'] = self.extractor.ft.noisy
+        # a frame whose F/T features may hold a noisy sample is held off like one after a
+        # dropped message
+        self.hold_off_until(self.extractor.ft.noise_until)
         if n == 0:
             return Decisions.empty()
         if n == 1 and not isinstance(now, np.ndarray):

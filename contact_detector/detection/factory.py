@@ -32,6 +32,7 @@ from contact_detector.detection.fallback import AudioFallback
 from contact_detector.detection.offline import Run, run_detector
 from contact_detector.detection.parameters import read_param_file
 from contact_detector.detection.release import rule_overrides
+from contact_detector.features.noise import NOISE_JUMP_N
 from contact_detector.io.discovery import Streams
 from contact_detector.io.messages import normalise_msg_type
 from contact_detector.io.sensor_stream import sensor_events, StreamSpec
@@ -52,6 +53,7 @@ def settings_from_params(params: dict, *, audio_rate: Optional[float]) -> tuple:
         'warmup_s': float(params.get('warmup_s', 0.5)),
         'corrupt_holdoff_s': float(params.get('corrupt_holdoff_s', 0.2)),
         'wrench_bias': tuple(params.get('wrench.bias', (0.0,) * 6)),
+        'noise_jump_n': float(params.get('wrench.noise_jump', NOISE_JUMP_N)),
     }
     age = params.get('max_ft_age_s', 0.0)
     if age and age > 0:

@@ -79,8 +79,9 @@ class Run:
         -------
         str or None
             One line for the tools to print; None when at least half of the frames were
-            decided, no frame was stale, non-finite or after a time jump, and no F/T sample
-            was left out as a driver's placeholder (a force or torque of exactly 0 after a load).
+            decided, no frame was stale, non-finite or after a time jump, no F/T sample
+            was left out as a driver's placeholder (a force or torque of exactly 0 after a load)
+            and none was noise (``wrench_noise``: releases held off after it).
 
         """
         c = self.counts
@@ -89,10 +90,17 @@ class Run:
         found = [f'{c[k]} {what}' for k, what in (
             ('stale_frames', 'stale'), ('nonfinite_frames', 'non-finite'),
             ('time_jumps', 'time jumps')) if c.get(k)]
-        placeholders = c.get('wrench_placeholders', 0)
-        note = (f'{placeholders} F/T samples with a force or torque of exactly (0, 0, 0) after a '
-                "load were left out (a driver's placeholder for a missing reading)"
-                if placeholders else None)
+        placeholders, noisy = c.get('wrench_placeholders', 0), c.get('wrench_noise', 0)
+        notes = []
+        if placeholders:
+            notes.append(f'{placeholders} F/T samples with a force or torque of exactly (0, 0, 0) '
+                         "after a load were left out (a driver's placeholder for a missing "
+                         'reading)')
+        if noisy:
+            notes.append(f'{noisy} F/T samples were noise (the force jumped back and forth: '
+                         'interference or a loose connector?); no frame whose F/T features saw '
+                         'them could release')
+        note = '; '.join(notes) or None
         if frames == 0:
             return f'no frame from {msgs} messages' if msgs else note
         if invalid * 2 <= frames and not found:

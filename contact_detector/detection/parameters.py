@@ -114,6 +114,10 @@ PARAMS: Sequence[ParamSpec] = (
               'an empty hand. ~/zero_sensor measures and sets it; a change restarts the stream '
               'state (warm-up). Zero the sensor with the empty hand, never while it holds the '
               'object.', -10000.0, 10000.0, read_only=False),
+    ParamSpec('wrench.noise_jump', 15.0, 'A force reading whose median jump over 0.1 s is '
+              'at least this, N, while it reverses direction from sample to sample '
+              '(interference, a loose connector) is noise: no frame whose F/T features saw it '
+              'releases (0.64 s after it with the shipped models; 0 = off).', 0.0, 1000.0),
     ParamSpec('wrench.stamp_source', 'header', "Time of a wrench sample: 'header' = its stamp, "
               "'receive' = the node clock on arrival.", choices=STAMP_SOURCES),
     ParamSpec('qos.reliability', 'best_effort', 'Reliability of the input subscriptions '
@@ -245,6 +249,7 @@ class NodeConfig:
     audio_wait_for_info: bool
     wrench_rate: float
     wrench_bias: tuple
+    wrench_noise_jump: float
     wrench_stamp_source: str
     qos_reliability: str
     qos_depth: int
@@ -342,7 +347,7 @@ def config_from_values(values: Mapping[str, Any]) -> NodeConfig:
         audio_channel=None if channel < 0 else channel,
         audio_stamp_source=v['audio.stamp_source'], audio_max_chunk_s=v['audio.max_chunk_s'],
         audio_wait_for_info=v['audio.wait_for_info'], wrench_rate=v['wrench.rate'],
-        wrench_bias=v['wrench.bias'],
+        wrench_bias=v['wrench.bias'], wrench_noise_jump=v['wrench.noise_jump'],
         wrench_stamp_source=v['wrench.stamp_source'], qos_reliability=v['qos.reliability'],
         qos_depth=v['qos.depth'], max_input_delay_s=v['max_input_delay_s'],
         max_ft_age_s=v['max_ft_age_s'] or None, max_ft_wait_s=v['max_ft_wait_s'],

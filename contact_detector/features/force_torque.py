@@ -37,6 +37,8 @@ from contact_detector.features.deltas import (carried_lever, relative_to_carried
                                               roughness, vector_shift, window_mean, window_median,
                                               with_angle)
 from contact_detector.features.frames import TimeJumpError
+from contact_detector.features.noise import jump_statistics, NOISE_JUMP_N, NOISE_WINDOW, \
+    REVERSAL_SHARE
 from contact_detector.features.resample import WrenchResampler
 import numpy as np
 
@@ -106,6 +108,10 @@ class ForceTorqueStream:
     backjump_tolerance_s : float
         A stamp earlier than the previous one by more than this raises :class:`TimeJumpError`;
         by less (a duplicate or reordered message) raises :class:`InputError`.
+    noise_jump_n : float
+        A grid sample is *noisy* when the median jump of the force over the newest
+        :data:`~.noise.NOISE_WINDOW` changes is at least this (N) and they reverse direction
+        at least :data:`~.noise.REVERSAL_SHARE` of the time (:mod:`~.noise`); 0 = never.
 
     Notes
     -----
@@ -124,10 +130,20 @@ class ForceTorqueStream:
     carried-load measurement, :func:`measure_carried_load`, of an empty hand); the caller
     decides whether to add it to the bias.
 
+    Noisy grid samples (``noise_jump_n``: interference, a loose connector) are counted in
+    :attr:`noisy`; :attr:`noise_until` is the time, on the frames' clock, up to which a frame
+    may have seen one in its features (``history`` samples after the newest): the detector
+    lets none of those release. The features are computed as usual.
+
     """
 
     def __init__(self, *, config: FeatureConfig, input_rate: float,
-                 gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5) -> None:
+                 gap_reset_s: float = 0.05, backjump_tolerance_s: float = 0.5,
+                 noise_jump_n: float = NOISE_JUMP_N) -> None:
+        if isinstance(noise_jump_n, bool) or not isinstance(noise_jump_n, (int, float)) \
+                or not 0.0 <= noise_jump_n < float('inf'):
+            raise InputError(f'noise_jump_n must be a finite number >= 0, got {noise_jump_n!r}')
+        self.noise_jump_n = float(noise_jump_n)
         self._resampler = WrenchResampler(input_rate=input_rate, output_rate=config.ft_rate_hz,
                                           at_completion=config.ft_only)
         self.config = config
@@ -202,6 +218,13 @@ class ForceTorqueStream:
         # the newest raw force and torque that were not (0, 0, 0), side by side
         self._last_reading: Optional[np.ndarray] = None
         self.restarts = 0
+        #: Noisy grid samples, and bursts of them (a noisy sample after the hold had ended).
+        self.noisy = 0
+        self.noise_bursts = 0
+        #: The median jump of the newest noisy sample, N (0 before any).
+        self.noise_level = 0.0
+        # the newest grid force vectors, for the jump statistics of the next samples
+        self._recent_forces = TailBuffer(capacity=NOISE_WINDOW + 64, width=3)
         self.reset()
 
     def set_bias(self, bias: Sequence[float]) -> None:
@@ -236,6 +259,8 @@ class ForceTorqueStream:
     def reset(self) -> None:
         """Forget everything, including the last stamp seen and the carried load."""
         self.last_input_t: Optional[float] = None
+        #: No frame timed before this (s) may release: its features may hold a noisy sample.
+        self.noise_until = -float('inf')
         #: The last completed measurement (load, how far it moved), None before the first.
         self.carried_load: Optional[CarriedLoad] = None
         self.measure_carried()
@@ -267,6 +292,7 @@ class ForceTorqueStream:
         self._recent_shifts.clear()
         self._recent_holds.clear()
         self._recent_carried_shifts.clear()
+        self._recent_forces.clear()         # a change across a gap is no jump of the reading
         # a measurement that completes from now on applies from its sample on
         self._previous_carried: Optional[np.ndarray] = None
         self._carried_from = 0
@@ -496,6 +522,8 @@ class ForceTorqueStream:
             self._measure(dec_v)
         if self._zeroing:
             self._measure_zero(dec_v)
+        if self.noise_jump_n > 0:
+            self._check_noise(dec_t, dec_v[:, :3])
         mag = np.stack([np.linalg.norm(dec_v[:, :3], axis=1),
                         np.linalg.norm(dec_v[:, 3:], axis=1)], axis=1)
         self._mags.extend(mag)
@@ -519,6 +547,25 @@ class ForceTorqueStream:
             self._vecs.keep_last(self.history)
         self._mag_start += self._mags.keep_last(self.history)
         return times, feats
+
+    def _check_noise(self, dec_t: np.ndarray, force: np.ndarray) -> None:
+        # Count the new grid samples that are noisy (jump_statistics) and move noise_until to
+        # history samples after the newest; keeps the newest NOISE_WINDOW forces.
+        before = self._recent_forces.view
+        jump, reversals = jump_statistics(force=np.concatenate([before, force]))
+        self._recent_forces.extend(force)
+        self._recent_forces.keep_last(NOISE_WINDOW)
+        new = min(jump.size, dec_t.size)     # the statistics of the new samples, newest last
+        noisy = ((jump[jump.size - new:] >= self.noise_jump_n)
+                 & (reversals[jump.size - new:] >= REVERSAL_SHARE))
+        if not noisy.any():
+            return
+        times = dec_t[dec_t.size - new:][noisy]
+        if times[0] > self.noise_until:
+            self.noise_bursts += 1
+        self.noisy += int(noisy.sum())
+        self.noise_level = float(jump[jump.size - new:][noisy][-1])
+        self.noise_until = float(times[-1]) + self.history / self.config.ft_rate_hz
 
     def _features(self, ends: np.ndarray) -> np.ndarray:
         cfg = self.config

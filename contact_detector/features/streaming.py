@@ -38,6 +38,7 @@ from contact_detector.features.buffers import TailBuffer
 from contact_detector.features.config import AUDIO_FEATURES, FeatureConfig
 from contact_detector.features.force_torque import ForceTorqueStream
 from contact_detector.features.frames import FeatureFrames
+from contact_detector.features.noise import NOISE_JUMP_N
 import numpy as np
 
 
@@ -77,13 +78,16 @@ class StreamingFeatureExtractor:
         Wrench gap that restarts the F/T window, seconds.
     audio_gap_tolerance_s : float
         Audio lateness that restarts the audio stream, seconds.
+    noise_jump_n : float
+        The F/T stream's noise check (:class:`ForceTorqueStream`), N; 0 = off.
 
     """
 
     def __init__(self, *, config: FeatureConfig, audio_rate: float,
                  ft_input_rate: Optional[float] = None, max_ft_age_s: Optional[float] = None,
                  max_ft_wait_s: float = 0.25, history_s: float = 10.0,
-                 ft_gap_reset_s: float = 0.05, audio_gap_tolerance_s: float = 0.2) -> None:
+                 ft_gap_reset_s: float = 0.05, audio_gap_tolerance_s: float = 0.2,
+                 noise_jump_n: float = NOISE_JUMP_N) -> None:
         self.config = config
         self.names = config.feature_names
         self.ft_only = config.ft_only
@@ -92,7 +96,7 @@ class StreamingFeatureExtractor:
                                  gap_tolerance_s=audio_gap_tolerance_s)
         self.ft = ForceTorqueStream(config=config,
                                     input_rate=ft_input_rate or config.ft_rate_hz,
-                                    gap_reset_s=ft_gap_reset_s)
+                                    gap_reset_s=ft_gap_reset_s, noise_jump_n=noise_jump_n)
         self.levels = AudioLevels(config=config)
         self.max_ft_age_s = (config.ft_hop / config.ft_rate_hz + 0.05
                              if max_ft_age_s is None else max_ft_age_s)

@@ -38,7 +38,7 @@ import numpy as np
 WARN_COUNTERS = ('audio_dropped', 'wrench_dropped', 'time_jumps', 'clock_jumps',
                  'callback_errors', 'audio_waiting_info', 'bad_stamps', 'audio_rate_mismatch',
                  'nonfinite_frames', 'audio_restarts', 'wrench_restarts', 'stale_frames',
-                 'audio_clipped', 'wrench_placeholders')
+                 'audio_clipped', 'wrench_placeholders', 'wrench_noise')
 
 
 class InputStream:

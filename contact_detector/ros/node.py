@@ -238,6 +238,7 @@ class DetectorWiring(DiagnosticsMixin):
         self._carried_seen = None           # the last carried-load measurement logged
         self._zero_seen = None              # the last zero measurement applied
         self._placeholders_seen = 0         # F/T placeholders (exact zeros) warned about
+        self._noise_bursts_seen = 0         # bursts of a noisy F/T reading warned about
         self._latency = {'audio': deque(maxlen=LATENCY_HISTORY),
                          'wrench': deque(maxlen=LATENCY_HISTORY)}
         self._window_latency: list = []
@@ -340,7 +341,8 @@ class DetectorWiring(DiagnosticsMixin):
             audio_rate=rate, wrench_rate=cfg.wrench_rate, max_ft_age_s=cfg.max_ft_age_s,
             max_ft_wait_s=cfg.max_ft_wait_s, max_input_delay_s=cfg.max_input_delay_s,
             warmup_s=cfg.warmup_s, corrupt_holdoff_s=cfg.corrupt_holdoff_s, armed_on_start=armed,
-            rule=cfg.rule((bundle or self.bundle).decision_rule), wrench_bias=cfg.wrench_bias)
+            rule=cfg.rule((bundle or self.bundle).decision_rule), wrench_bias=cfg.wrench_bias,
+            noise_jump_n=cfg.wrench_noise_jump)
 
     def _build_detector(self, *, rate: float, armed: bool):
         try:
@@ -415,6 +417,7 @@ class DetectorWiring(DiagnosticsMixin):
         self.counts['detector_rebuilds'] += 1
         self._time_jumps_seen = 0
         self._placeholders_seen = 0
+        self._noise_bursts_seen = 0
         self.get_logger().info(f'audio rate is now {rate:g} Hz: detector rebuilt, state reset')
 
     def detector_counts(self) -> Dict[str, int]:
@@ -574,6 +577,16 @@ class DetectorWiring(DiagnosticsMixin):
                            f'(0, 0, 0) after a load dropped ({placeholders} so far): '
                            "the driver's placeholder for a missing reading, not a measurement")
             self._placeholders_seen = placeholders
+        bursts = self.detector.extractor.ft.noise_bursts
+        if bursts != self._noise_bursts_seen:
+            if bursts > self._noise_bursts_seen:
+                ft = self.detector.extractor.ft
+                self._warn('wrench-noise', 'F/T reading noisy: the force jumps back and forth by '
+                           f'{ft.noise_level:.1f} N per sample (median over 0.1 s; '
+                           f'{ft.noisy} noisy samples so far): interference or a loose '
+                           'connector, not a load; no release for '
+                           f'{ft.history / ft.config.ft_rate_hz:.2f} s after it')
+            self._noise_bursts_seen = bursts
         zero = self.detector.zero_measurement
         if zero is not self._zero_seen:
             self._zero_seen = zero

@@ -236,6 +236,18 @@ def _zero_torque(w):
     w.torque.x = w.torque.y = w.torque.z = 0.0
 
 
+def white_noise(lo, hi, sigma):
+    """Add white noise of ``sigma`` N per force axis to the wrench in [lo, hi): interference."""
+    def inject(items, trial):
+        rng = np.random.default_rng(0)
+        for item in items:
+            if item.kind == 'wrench' and _inside(item, lo, hi):
+                f = item.msg.wrench.force
+                f.x, f.y, f.z = np.array([f.x, f.y, f.z]) + rng.normal(0.0, sigma, 3)
+        return items
+    return inject
+
+
 def _set(name, value):
     def change(w):
         target, axis = name.split('.')
@@ -302,6 +314,9 @@ CASES = [
     Case('wrench_zero_torque_placeholders', replace_wrench(-2.6, -2.5, _zero_torque),
          {'wrench_placeholders': 10}, r'exactly \(0, 0, 0\) after a load dropped',
          'wrench_placeholders', (-2.6, -2.5)),
+    Case('wrench_noise_burst', white_noise(-2.6, -2.4, 20.0), {'wrench_noise': 5},
+         r'F/T reading noisy: the force jumps back and forth by \d+\.\d N per sample',
+         'wrench_noise', (-2.6, -2.4)),
     Case('wrench_stamps_jump_back_30s', restamp_wrench(-3.0, -2.8, -30.0),
          {'time_jumps': 1, 'wrench_restarts': 1}, 'time jumped backwards, state reset',
          'time_jumps', (-3.0, -2.5)),

@@ -63,7 +63,7 @@ def test_integers_for_every_float_parameter(context, model):
     node = ContactDetectorNode(context=context, parameter_overrides=overrides)
     try:
         values = float_fields(node.config)
-        assert len(values) == 14          # every float field of NodeConfig
+        assert len(values) == 15          # every float field of NodeConfig
         assert node.config.release_overrides == {'refractory_s': 2.0}
         assert type(node.detector.rule.refractory_s) is float
         assert all(type(v) is float for v in values.values()), values

@@ -171,6 +171,21 @@ def test_the_fast_load_path_is_scored_after_the_load_path_alone(data, tmp_path, 
         sweep_cli.main([str(data['bags']), '--model', str(data['model']),
                         '--load2-threshold', '5'])
     assert '--load2-threshold needs --load-threshold' in capsys.readouterr().err
+    # a steady load as well: the same second path, which can only fire less often
+    steady = tmp_path / 'steady.md'
+    assert sweep_cli.main([str(data['bags']), '--model', str(data['model']), '--jobs', '1',
+                           '--load-threshold', '3', '--load-frames', '20', '--load-support', '0',
+                           '--load2-threshold', '0.5', '--load2-frames', '2',
+                           '--load2-support', '0', '--load2-steady', '0.5',
+                           '--out', str(steady)]) == 0
+    held = _table(steady.read_text())
+    assert held[2][1] == alone + ' or load>=0.5N x2 & mean5>=0 & steady10<=0.5'
+    assert held[1] == table[1]
+    assert fired(held[2]) <= fired(table[2])
+    with pytest.raises(SystemExit):
+        sweep_cli.main([str(data['bags']), '--model', str(data['model']),
+                        '--load-threshold', '3', '--load2-steady', '0.5'])
+    assert '--load2-steady needs --load2-threshold' in capsys.readouterr().err
 
 
 def test_own_test_needs_a_model(data, capsys):
