@@ -40,18 +40,14 @@ per rule as ``lofo_rules.py`` does. About ``groups + 1`` times the cost of ``lof
 
 import argparse
 import json
-from pathlib import Path
 import sys
 from typing import Dict, List, Sequence
 
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.training.recipe import recipe_defaults
-from contact_detector.training.studies import lofo_setting
 from contact_detector.training.sweep import (FeatureSetting, fit_forest, score_rules,
                                              TrialFrames)
-from lofo_frames import load_frames
-from lofo_rules import counts, parse_rule, RECIPES, summarise
+from lofo_rules import add_arguments, print_rules, recipe_frames, recipe_rules, summarise
 import numpy as np
 from sklearn.isotonic import IsotonicRegression
 
@@ -101,33 +97,15 @@ def main(argv=None) -> int:
     """Run the comparison; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('folders', nargs='+', type=Path)
-    parser.add_argument('--recipe', choices=sorted(RECIPES), default='ft-only')
-    parser.add_argument('--rule', action='append', default=[],
-                        help='NAME:FIELD=VALUE[,...], the shipped rule with those fields')
-    parser.add_argument('--seeds', default='0,1,2')
+    add_arguments(parser)
     parser.add_argument('--groups', type=int, default=3,
                         help='groups of training families the calibration predicts in turn')
-    parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--families', action='store_true', help='one line per family too')
-    parser.add_argument('--json', type=Path, default=None, help='the counts, as JSON')
     args = parser.parse_args(argv)
     if args.groups < 2:
         parser.error('--groups must be at least 2')
-    setting_name, shipped, ft_only = RECIPES[args.recipe]
-    rules = {'S': shipped}
-    for text in args.rule:
-        try:
-            name, rule = parse_rule(text, base=shipped)
-        except argparse.ArgumentTypeError as err:
-            parser.error(f'--rule: {err}')
-        rules[name] = rule
-    recipe = recipe_defaults(ft_only=ft_only)
-    setting, _ = lofo_setting(setting_name, label=recipe.labels)
-    frames = list(load_frames(folders=args.folders, config=setting.config, cache=None,
-                              jobs=args.jobs).values())
-    fit = list(load_frames(folders=args.folders, config=setting.config, cache=None,
-                           jobs=args.jobs, augmentation=recipe.augmentation).values())
+    setting, rules = recipe_rules(args, parser)
+    keyed, fit = recipe_frames(args, setting)
+    frames = list(keyed.values())
     names = list(rules) + [f'{name}~cal' for name in rules]
     outcomes: Dict[str, List] = {name: [] for name in names}
     knocked: Dict[str, List] = {name: [] for name in names}
@@ -156,19 +134,7 @@ def main(argv=None) -> int:
                   file=sys.stderr, flush=True)
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in names}
-    for name, figures in summary.items():
-        by_family, worst, hit = figures['by_family'], figures['worst'], figures['knocked']
-        median = ('n/a' if hit['latency_ms_median'] is None
-                  else f"{hit['latency_ms_median']:.0f} ms")
-        print(f"{name}: all {counts(by_family['all'])}, median "
-              f"{by_family['all']['latency_ms_median'] or 0:.0f} ms; worst {worst} "
-              f'{counts(by_family[worst])}; knocked on the hand {counts(hit)}, {median}')
-        if args.families:
-            for family, f in by_family.items():
-                if family != 'all':
-                    print(f'    {family}: {counts(f)}, median '
-                          f"{f['latency_ms_median'] or 0:.0f} / p95 "
-                          f"{f['latency_ms_p95'] or 0:.0f} ms")
+    print_rules(summary, families=args.families)
     if args.json:
         args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
                                          'curves': curves, 'summary': summary}, indent=1))

@@ -103,10 +103,8 @@ def counts(summary: Dict[str, object]) -> str:
     return f"{summary['detected']}/{summary['trials']}, {summary['premature']} early"
 
 
-def main(argv=None) -> int:
-    """Run the comparison; return the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the folders and the options every left-out rule comparison takes."""
     parser.add_argument('folders', nargs='+', type=Path)
     parser.add_argument('--recipe', choices=sorted(RECIPES), default='ft-only')
     parser.add_argument('--rule', action='append', default=[],
@@ -115,10 +113,15 @@ def main(argv=None) -> int:
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--families', action='store_true', help='one line per family too')
     parser.add_argument('--json', type=Path, default=None, help='the counts, as JSON')
-    parser.add_argument('--splitter', choices=SPLITTERS, default='best',
-                        help="the forests' trees: 'best' (the shipped random forests) or "
-                             "'random' (extremely randomized trees)")
-    args = parser.parse_args(argv)
+
+
+def recipe_rules(args: argparse.Namespace,
+                 parser: argparse.ArgumentParser) -> Tuple[object, Dict[str, DecisionRule]]:
+    """
+    Return the recipe's ``sweep --lofo`` setting and the rules to score, ``S`` first.
+
+    ``S`` is the recipe's shipped rule, then every ``--rule`` (a bad one is a parser error).
+    """
     setting_name, shipped, ft_only = RECIPES[args.recipe]
     rules = {'S': shipped}
     for text in args.rule:
@@ -127,13 +130,53 @@ def main(argv=None) -> int:
         except argparse.ArgumentTypeError as err:
             parser.error(f'--rule: {err}')
         rules[name] = rule
-    recipe = recipe_defaults(ft_only=ft_only)
-    setting, _ = lofo_setting(setting_name, label=recipe.labels)
+    setting, _ = lofo_setting(setting_name, label=recipe_defaults(ft_only=ft_only).labels)
+    return setting, rules
+
+
+def recipe_frames(args: argparse.Namespace, setting) -> Tuple[Dict[str, object], List]:
+    """
+    Return every trial's frames as simulated (keyed) and as the forests train on them.
+
+    The second are the same trials with the recipe's wrench augmentation.
+    """
+    recipe = recipe_defaults(ft_only=RECIPES[args.recipe][2])
     frames = load_frames(folders=args.folders, config=setting.config, cache=None,
                          jobs=args.jobs)
-    keys = list(frames)
     fit = list(load_frames(folders=args.folders, config=setting.config, cache=None,
                            jobs=args.jobs, augmentation=recipe.augmentation).values())
+    return frames, fit
+
+
+def print_rules(summary: Dict[str, Dict[str, object]], *, families: bool) -> None:
+    """Print one line per rule of :func:`summarise` outputs; ``families``: one per family too."""
+    for name, figures in summary.items():
+        by_family, worst, hit = figures['by_family'], figures['worst'], figures['knocked']
+        median = ('n/a' if hit['latency_ms_median'] is None
+                  else f"{hit['latency_ms_median']:.0f} ms")
+        print(f"{name}: all {counts(by_family['all'])}, median "
+              f"{by_family['all']['latency_ms_median'] or 0:.0f} ms; worst {worst} "
+              f'{counts(by_family[worst])}; knocked on the hand {counts(hit)}, {median}')
+        if families:
+            for family, f in by_family.items():
+                if family != 'all':
+                    print(f'    {family}: {counts(f)} ({premature_text(f)}), median '
+                          f"{f['latency_ms_median'] or 0:.0f} / p95 "
+                          f"{f['latency_ms_p95'] or 0:.0f} ms")
+
+
+def main(argv=None) -> int:
+    """Run the comparison; return the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(parser)
+    parser.add_argument('--splitter', choices=SPLITTERS, default='best',
+                        help="the forests' trees: 'best' (the shipped random forests) or "
+                             "'random' (extremely randomized trees)")
+    args = parser.parse_args(argv)
+    setting, rules = recipe_rules(args, parser)
+    frames, fit = recipe_frames(args, setting)
+    keys = list(frames)
     outcomes = {name: [] for name in rules}
     knocked = {name: [] for name in rules}
     for seed in (int(s) for s in args.seeds.split(',')):
@@ -149,18 +192,7 @@ def main(argv=None) -> int:
         print(f'seed {seed}: every family left out', file=sys.stderr, flush=True)
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in rules}
-    for name, figures in summary.items():
-        by_family, worst, hit = figures['by_family'], figures['worst'], figures['knocked']
-        median = ('n/a' if hit['latency_ms_median'] is None
-                  else f"{hit['latency_ms_median']:.0f} ms")
-        print(f"{name}: all {counts(by_family['all'])}; worst {worst} "
-              f'{counts(by_family[worst])}; knocked on the hand {counts(hit)}, {median}')
-        if args.families:
-            for family, f in by_family.items():
-                if family != 'all':
-                    print(f'    {family}: {counts(f)} ({premature_text(f)}), median '
-                          f"{f['latency_ms_median'] or 0:.0f} / p95 "
-                          f"{f['latency_ms_p95'] or 0:.0f} ms")
+    print_rules(summary, families=args.families)
     if args.json:
         args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
                                          'summary': summary}, indent=1))
