@@ -46,7 +46,7 @@ from typing import Dict, List, Sequence
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.training.sweep import (FeatureSetting, fit_forest, score_rules,
-                                             TrialFrames)
+                                             setting_columns, TrialFrames)
 from lofo_rules import add_arguments, print_rules, recipe_frames, recipe_rules, summarise
 import numpy as np
 from sklearn.isotonic import IsotonicRegression
@@ -77,9 +77,7 @@ def cross_family_calibration(*, frames: Sequence[TrialFrames], fit: Sequence[Tri
     window's ``trained`` mask) enter the fit.
     """
     names = sorted({f.truth.condition for f in frames})
-    every = setting.config.feature_names
-    cols = (np.arange(len(every)) if setting.columns is None
-            else np.array([every.index(c) for c in setting.columns]))
+    cols = setting_columns(setting)
     p, y = [], []
     for part in (set(names[i::groups]) for i in range(groups)):
         forest = fit_forest(frames=[f for f in fit if f.truth.condition not in part],

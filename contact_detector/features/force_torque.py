@@ -548,24 +548,28 @@ class ForceTorqueStream:
         self._mag_start += self._mags.keep_last(self.history)
         return times, feats
 
+    @property
+    def noise_hold_s(self) -> float:
+        """Return how long after a noisy grid sample frames may still hold it, s."""
+        return self.history / self.config.ft_rate_hz
+
     def _check_noise(self, dec_t: np.ndarray, force: np.ndarray) -> None:
         # Count the new grid samples that are noisy (jump_statistics) and move noise_until to
-        # history samples after the newest; keeps the newest NOISE_WINDOW forces.
-        before = self._recent_forces.view
-        jump, reversals = jump_statistics(force=np.concatenate([before, force]))
+        # noise_hold_s after the newest; keeps the newest NOISE_WINDOW forces.
+        jump, reversals = jump_statistics(
+            force=np.concatenate([self._recent_forces.view, force]))
         self._recent_forces.extend(force)
         self._recent_forces.keep_last(NOISE_WINDOW)
-        new = min(jump.size, dec_t.size)     # the statistics of the new samples, newest last
-        noisy = ((jump[jump.size - new:] >= self.noise_jump_n)
-                 & (reversals[jump.size - new:] >= REVERSAL_SHARE))
+        # the windows end at the newest samples: those of the new ones are the last
+        noisy = (jump >= self.noise_jump_n) & (reversals >= REVERSAL_SHARE)
         if not noisy.any():
             return
-        times = dec_t[dec_t.size - new:][noisy]
+        times = dec_t[dec_t.size - jump.size:][noisy]
         if times[0] > self.noise_until:
             self.noise_bursts += 1
         self.noisy += int(noisy.sum())
-        self.noise_level = float(jump[jump.size - new:][noisy][-1])
-        self.noise_until = float(times[-1]) + self.history / self.config.ft_rate_hz
+        self.noise_level = float(jump[noisy][-1])
+        self.noise_until = float(times[-1]) + self.noise_hold_s
 
     def _features(self, ends: np.ndarray) -> np.ndarray:
         cfg = self.config

@@ -585,7 +585,7 @@ class DetectorWiring(DiagnosticsMixin):
                            f'{ft.noise_level:.1f} N per sample (median over 0.1 s; '
                            f'{ft.noisy} noisy samples so far): interference or a loose '
                            'connector, not a load; no release for '
-                           f'{ft.history / ft.config.ft_rate_hz:.2f} s after it')
+                           f'{ft.noise_hold_s:.2f} s after it')
             self._noise_bursts_seen = bursts
         zero = self.detector.zero_measurement
         if zero is not self._zero_seen:

@@ -185,7 +185,8 @@ def compute_frames(*, events_by_trial: Dict[str, tuple], config: FeatureConfig,
     return dict(zip(names, frames))
 
 
-def _columns(setting: FeatureSetting) -> np.ndarray:
+def setting_columns(setting: FeatureSetting) -> np.ndarray:
+    """Return the indices of ``setting``'s columns among its configuration's features."""
     names = setting.config.feature_names
     if setting.columns is None:
         return np.arange(len(names))
@@ -204,7 +205,7 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     near a trial's exogenous events weigh ``setting.label.event_weight``
     (:meth:`~.protocol.LabelWindow.weights`).
     """
-    cols = _columns(setting)
+    cols = setting_columns(setting)
     trained = [setting.label.trained(t=f.t, onsets=[f.truth.onset_t]) for f in frames]
     x = np.concatenate([f.x[keep][:, cols] for f, keep in zip(frames, trained)])
     y = np.concatenate([frame_labels(t=f.t[keep], onsets=[f.truth.onset_t],
@@ -237,7 +238,7 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
     load path reads the setting's ``force_carried_shift`` and ``force_carried_shift_cos``
     columns (ConfigError without them).
     """
-    cols = _columns(setting)
+    cols = setting_columns(setting)
     names = setting.config.feature_names
     if any(rule.uses_load for rule in rules) and not set(RULE_FEATURES) <= set(names):
         raise ConfigError(f'a rule with the load path needs the {" and ".join(RULE_FEATURES)} '
