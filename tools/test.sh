@@ -7,4 +7,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/ubuntu2404_env.sh"
 source "$root/tools/ros_env.sh"
 cd "$root"
-exec "$root/.venv/bin/python" -m pytest -q -p no:cacheprovider --durations=15 "$@"
+# Two workers (pytest-xdist), one per core of the 2-core CI machine, each test file on one worker
+# (its module fixtures built once); test/conftest.py gives each worker a DDS domain of its own.
+# A later `-n 0` on the command line runs the tests in one process.
+exec "$root/.venv/bin/python" -m pytest -q -p no:cacheprovider --durations=15 -n 2 \
+  --dist loadfile "$@"
