@@ -53,7 +53,12 @@ from sklearn.isotonic import IsotonicRegression
 
 
 class CalibratedForest:
-    """A fitted forest whose P(contact) passes through a fitted ``IsotonicRegression``."""
+    """
+    A fitted forest whose P(contact) passes through a fitted ``IsotonicRegression``.
+
+    ``forest`` is a scikit-learn forest (``predict_proba`` gives both classes, shape (n, 2))
+    or a ``CompiledForest`` (P(contact) alone, shape (n,)).
+    """
 
     def __init__(self, *, forest: object, calibration: IsotonicRegression) -> None:
         self.forest = forest
@@ -61,7 +66,8 @@ class CalibratedForest:
 
     def predict_proba(self, x: np.ndarray) -> np.ndarray:
         """Return ``[1 - g(P), g(P)]`` per row, shape ``(n, 2)``."""
-        p = self.calibration.predict(self.forest.predict_proba(x)[:, 1])
+        p = np.asarray(self.forest.predict_proba(x))
+        p = self.calibration.predict(p[:, 1] if p.ndim == 2 else p)
         return np.column_stack([1.0 - p, p])
 
 
