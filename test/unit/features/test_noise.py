@@ -86,6 +86,16 @@ def test_a_noise_burst_is_counted_once_and_holds_for_the_features_look_back():
         stream.noisy, stream.noise_bursts, stream.noise_until)
 
 
+def test_the_check_holds_releases_and_leaves_the_features_as_they_are():
+    # what training relies on when it turns the check off: the same frames either way
+    t, force, torque = _noisy_reading(20.0)
+    on_t, on_x = _stream().push(t=t, force=force, torque=torque)
+    off_t, off_x = _stream(noise_jump_n=0.0).push(t=t, force=force, torque=torque)
+    assert on_x.shape[0] > 100
+    np.testing.assert_array_equal(on_t, off_t)
+    np.testing.assert_array_equal(on_x, off_x)
+
+
 @pytest.mark.parametrize('case', ['sensor noise', 'quiet 2 N noise', 'contact', 'off'])
 def test_readings_that_are_not_noise_are_never_flagged(case):
     t, force, torque = held_load(seconds=5.0, rate=RATE, t0=T0, seed=2)
