@@ -50,12 +50,12 @@ from contact_detector.io.bags import find_bags
 from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import load_events
 from contact_detector.model.storage import load_bundle
-from contact_detector.training.protocol import LabelWindow, labels_for
+from contact_detector.training.protocol import labels_for, LabelWindow
 from contact_detector.training.sweep import FeatureSetting, score_rules, trial_frames
 from joblib import delayed, Parallel
 from lofo_calibration import CalibratedForest, cross_family_calibration
-from lofo_rules import add_arguments, print_rules, recipe_frames, recipe_rules, RECIPES
-from lofo_rules import summarise
+from lofo_rules import (add_arguments, print_rules, recipe_frames, recipe_rules, RECIPES,
+                        summarise)
 
 
 def recording_frames(*, bag: Path, onset: float, name: str, family: str, config,
