@@ -51,9 +51,9 @@ from contact_detector.io.discovery import discover_streams
 from contact_detector.io.sensor_stream import load_events
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.protocol import labels_for, LabelWindow
-from contact_detector.training.sweep import FeatureSetting, score_rules, trial_frames
+from contact_detector.training.sweep import FeatureSetting, trial_frames
 from joblib import delayed, Parallel
-from lofo_calibration import CalibratedForest, cross_family_calibration
+from lofo_calibration import cross_family_calibration, curve, score_raw_and_calibrated
 from lofo_rules import (add_arguments, print_rules, recipe_frames, recipe_rules, RECIPES,
                         summarise)
 
@@ -125,16 +125,12 @@ def main(argv=None) -> int:
         calibration = cross_family_calibration(frames=list(keyed.values()), fit=fit,
                                                setting=setting, groups=args.groups, seed=seed,
                                                jobs=args.jobs)
-        grid = [i / 10 for i in range(11)]
-        curves[seed] = [round(float(v), 3) for v in calibration.predict(grid)]
+        curves[seed] = curve(calibration)
         print(f'seed {seed}: g(0, 0.1, ..., 1) = {curves[seed]}', file=sys.stderr, flush=True)
-        calibrated = CalibratedForest(forest=forest, calibration=calibration)
         for set_name, frames in sets.items():
-            raw = score_rules(forest=forest, frames=frames, setting=scored,
-                              rules=list(rules.values()))
-            cal = score_rules(forest=calibrated, frames=frames, setting=scored,
-                              rules=list(rules.values()))
-            for name, row in zip(names, raw + cal):
+            rows = score_raw_and_calibrated(forest=forest, calibration=calibration,
+                                            frames=frames, setting=scored, rules=rules)
+            for name, row in zip(names, rows):
                 outcomes[set_name][name] += row.outcomes
                 outcomes['all'][name] += row.outcomes
     summary = {}

@@ -97,6 +97,25 @@ def cross_family_calibration(*, frames: Sequence[TrialFrames], fit: Sequence[Tri
         np.concatenate(p), np.concatenate(y).astype(float))
 
 
+def curve(calibration: IsotonicRegression) -> List[float]:
+    """Return ``g`` at P = 0, 0.1, ..., 1, to 3 decimals (what the scripts print of a map)."""
+    return np.round(calibration.predict(np.linspace(0.0, 1.0, 11)), 3).tolist()
+
+
+def score_raw_and_calibrated(*, forest: object, calibration: IsotonicRegression,
+                             frames: Sequence[TrialFrames], setting: FeatureSetting,
+                             rules: Dict[str, object]) -> List[object]:
+    """
+    Score every rule on P and on ``g(P)`` with the same forest (``score_rules``' rows).
+
+    The rows are in the order of ``list(rules) + [name + '~cal' for name in rules]``.
+    """
+    raw = score_rules(forest=forest, frames=frames, setting=setting, rules=list(rules.values()))
+    cal = score_rules(forest=CalibratedForest(forest=forest, calibration=calibration),
+                      frames=frames, setting=setting, rules=list(rules.values()))
+    return raw + cal
+
+
 def main(argv=None) -> int:
     """Run the comparison; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__,
@@ -124,13 +143,10 @@ def main(argv=None) -> int:
             calibration = cross_family_calibration(frames=train, fit=train_fit,
                                                    setting=setting, groups=args.groups,
                                                    seed=seed, jobs=args.jobs)
-            grid = np.linspace(0.0, 1.0, 11)
-            curves[f'{seed}/{family}'] = np.round(calibration.predict(grid), 3).tolist()
-            raw = score_rules(forest=forest, frames=test, setting=setting,
-                              rules=list(rules.values()))
-            cal = score_rules(forest=CalibratedForest(forest=forest, calibration=calibration),
-                              frames=test, setting=setting, rules=list(rules.values()))
-            for name, row in zip(names, raw + cal):
+            curves[f'{seed}/{family}'] = curve(calibration)
+            rows = score_raw_and_calibrated(forest=forest, calibration=calibration,
+                                            frames=test, setting=setting, rules=rules)
+            for name, row in zip(names, rows):
                 outcomes[name] += row.outcomes
                 knocked[name] += [o for o, f in zip(row.outcomes, test)
                                   if knocked_in_air(f.truth)]
