@@ -942,6 +942,9 @@ def test_train_splitter_random_grows_extremely_randomized_trees_that_detect_runs
     bundle, card = _trained_with(data, model, '--splitter', 'random')
     assert bundle.training['splitter'] == card['training']['splitter'] == 'random'
     assert data['bundle'].training['splitter'] == 'best'   # the default: the paper's forest
+    # logs and /diagnostics tell the two kinds of forest apart
+    assert bundle.model_id.startswith('et') and data['bundle'].model_id.startswith('rf')
+    assert bundle.model_id == card['model_id']
     # extremely randomized trees grow on every frame, a random forest on bootstrap samples
     assert card['forest']['params']['bootstrap'] is False
     assert data['bundle'].trees.params['bootstrap'] is True
