@@ -58,12 +58,20 @@ class FeatureSetting:
 
 @dataclass
 class TrialFrames:
-    """Valid frames of one trial under one feature setting."""
+    """
+    Valid frames of one trial under one feature setting.
+
+    ``breaks`` are the indices of the valid frames that follow invalid ones (an F/T window
+    restarted mid-trial after a gap in the stamps): the detector decides those invalid frames,
+    and each empties the rule's history, so :func:`score_rules` does the same there.
+    """
 
     truth: Truth
     t: np.ndarray
     x: np.ndarray
     t0: float
+    # a class attribute as well, so frames pickled before the field existed read as unbroken
+    breaks: tuple = ()
 
 
 @dataclass
@@ -164,7 +172,9 @@ def trial_frames(*, events, truth: Truth, config: FeatureConfig, audio_rate: flo
                                           ft_input_rate=wrench_rate, noise_jump_n=0.0)
     frames = run_features(events, extractor=extractor)
     t0 = float(frames.t[0]) if len(frames) else 0.0
-    return TrialFrames(truth=truth, t=frames.t[frames.valid], x=frames.x[frames.valid], t0=t0)
+    kept = np.flatnonzero(frames.valid)
+    breaks = tuple(int(i) for i in np.flatnonzero(np.diff(kept) > 1) + 1)
+    return TrialFrames(truth=truth, t=frames.t[kept], x=frames.x[kept], t0=t0, breaks=breaks)
 
 
 def compute_frames(*, events_by_trial: Dict[str, tuple], config: FeatureConfig,
@@ -229,6 +239,21 @@ def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:
     return forest.predict_proba(x)[:, 1]
 
 
+def _decided_frames(*, frames: TrialFrames, p: np.ndarray, blocked: np.ndarray,
+                    inputs: Dict[str, Optional[np.ndarray]]) -> tuple:
+    """
+    Return what the detector's rule decides of one trial: ``t, p, valid, blocked, inputs``.
+
+    The valid frames, with one invalid frame (P 0) before each of ``frames.breaks``: the
+    detector's invalid frames there empty the rule's history, and one does what they do.
+    """
+    at = np.asarray(frames.breaks, dtype=int)
+    valid = np.insert(np.ones(frames.t.size, bool), at, False)
+    return (np.insert(frames.t, at, frames.t[at]), np.insert(p, at, 0.0), valid,
+            np.insert(blocked, at, False),
+            {k: None if v is None else np.insert(v, at, 0.0) for k, v in inputs.items()})
+
+
 def score_rules(*, forest: object, frames: Sequence[TrialFrames],
                 setting: FeatureSetting, rules: Sequence[DecisionRule],
                 warmup_s: float = 0.5) -> List[SweepRow]:
@@ -256,12 +281,14 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
         pred = []
         for f, p in zip(frames, probs):
             logic = ReleaseLogic(rule=rule, armed=True)
-            contact, releases = logic.step(
-                t=f.t, p=p, valid=np.ones(f.t.size, bool), blocked=f.t < f.t0 + warmup_s,
-                **rule_inputs(names=names, x=f.x))
+            t, p_all, valid, blocked, inputs = _decided_frames(
+                frames=f, p=p, blocked=f.t < f.t0 + warmup_s,
+                inputs=rule_inputs(names=names, x=f.x))
+            contact, releases = logic.step(t=t, p=p_all, valid=valid, blocked=blocked,
+                                           **inputs)
             events = list(logic.last_events)
             outcomes.append(score_trial(truth=f.truth, releases=releases, events=events))
-            pred.append(contact)
+            pred.append(contact[valid])
         yp = np.concatenate(pred)
         tp = int(np.sum(yp & (y == 1)))
         precision = tp / max(1, int(yp.sum()))
