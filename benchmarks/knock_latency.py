@@ -43,12 +43,11 @@ from collections import defaultdict
 from pathlib import Path
 import sys
 
-from contact_detector.detection.release import ReleaseLogic, rule_inputs
 from contact_detector.evaluation.metrics import score_trial
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
 from contact_detector.model.storage import load_bundle
-from contact_detector.training.sweep import compute_frames, decode_bags
+from contact_detector.training.sweep import compute_frames, decide_trial, decode_bags
 import numpy as np
 
 WARMUP_S = 0.5
@@ -91,11 +90,9 @@ def trial_rows(*, bundle, frames) -> list:
     rows = []
     for name, f in sorted(frames.items()):
         p = forest.predict_proba(f.x[:, :n_model]) if f.x.shape[0] else np.zeros(0)
-        logic = ReleaseLogic(rule=rule, armed=True)
-        _, releases = logic.step(t=f.t, p=p, valid=np.ones(f.t.size, bool),
-                                 blocked=f.t < f.t0 + WARMUP_S,
-                                 **rule_inputs(names=names, x=f.x))
-        out = score_trial(truth=f.truth, releases=releases, events=list(logic.last_events))
+        _, releases, events = decide_trial(frames=f, p=p, rule=rule, names=names,
+                                           warmup_s=WARMUP_S)
+        out = score_trial(truth=f.truth, releases=releases, events=events)
         onset = f.truth.onset_t
         path = '-'
         if out.release_t is not None:

@@ -28,7 +28,6 @@ from pathlib import Path
 import pickle
 from typing import Any, Dict, Optional, Sequence, Tuple
 
-from contact_detector.detection.release import ReleaseLogic
 from contact_detector.features.config import FeatureConfig
 from contact_detector.io.bags import find_bags
 from contact_detector.io.sensor_stream import StreamSpec
@@ -38,7 +37,7 @@ from contact_detector.training.augmentation import (AUGMENTED, scale_range,
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.recipe import DEFAULT_RULE
 from contact_detector.training.studies import FeatureSetting, lofo_setting, LOFO_SETTINGS
-from contact_detector.training.sweep import compute_frames, decode_bags
+from contact_detector.training.sweep import compute_frames, decide_trial, decode_bags
 import numpy as np
 
 
@@ -143,9 +142,8 @@ def left_out_decisions(*, forest: Any, frames: Any, setting: FeatureSetting,
     """
     names = setting.config.feature_names
     p = forest.predict_proba(frames.x[:, [names.index(c) for c in setting.columns]])[:, 1]
-    contact, releases = ReleaseLogic(rule=rule, armed=True).step(
-        t=frames.t, p=p, valid=np.ones(frames.t.size, bool),
-        blocked=frames.t < frames.t0 + WARMUP_S)
+    contact, releases, _ = decide_trial(frames=frames, p=p, rule=rule, names=names,
+                                        warmup_s=WARMUP_S)
     return p, contact, releases
 
 

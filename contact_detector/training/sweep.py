@@ -24,7 +24,7 @@ re-measures the chosen defaults through the full detector.
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Dict, Iterable, List, Optional, Sequence
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 from contact_detector.detection.factory import stream_spec
 from contact_detector.detection.offline import run_features
@@ -239,19 +239,47 @@ def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:
     return forest.predict_proba(x)[:, 1]
 
 
-def _decided_frames(*, frames: TrialFrames, p: np.ndarray, blocked: np.ndarray,
-                    inputs: Dict[str, Optional[np.ndarray]]) -> tuple:
+def decide_trial(*, frames: TrialFrames, p: np.ndarray, rule: DecisionRule,
+                 names: Sequence[str], warmup_s: float = 0.5) -> Tuple[np.ndarray, list, list]:
     """
-    Return what the detector's rule decides of one trial: ``t, p, valid, blocked, inputs``.
+    Decide one trial's frames with ``rule`` as the detector does.
 
-    The valid frames, with one invalid frame (P 0) before each of ``frames.breaks``: the
-    detector's invalid frames there empty the rule's history, and one does what they do.
+    Parameters
+    ----------
+    frames : TrialFrames
+        The trial's valid frames (``t``, s, shape (n,); ``x``, shape (n, len(names))).
+    p : np.ndarray, shape (n,)
+        P(contact) per frame.
+    rule : DecisionRule
+        The release rule; its load paths read ``names``' load columns (``rule_inputs``).
+    names : sequence of str
+        The names of ``frames.x``'s columns.
+    warmup_s : float
+        Frames before ``frames.t0 + warmup_s`` may not release (the detector's warm-up), s.
+
+    Returns
+    -------
+    contact : np.ndarray, shape (n,), bool
+        The rule's decision per frame.
+    releases, events : list of float
+        Release and contact-event times, s.
+
+    Notes
+    -----
+    Before each of ``frames.breaks`` one invalid frame (P 0) is decided: the detector's
+    invalid frames there (an F/T restart) empty the rule's history, and one does what they do.
+
     """
     at = np.asarray(frames.breaks, dtype=int)
     valid = np.insert(np.ones(frames.t.size, bool), at, False)
-    return (np.insert(frames.t, at, frames.t[at]), np.insert(p, at, 0.0), valid,
-            np.insert(blocked, at, False),
-            {k: None if v is None else np.insert(v, at, 0.0) for k, v in inputs.items()})
+    inputs = {k: None if v is None else np.insert(v, at, 0.0)
+              for k, v in rule_inputs(names=names, x=frames.x).items()}
+    logic = ReleaseLogic(rule=rule, armed=True)
+    contact, releases = logic.step(t=np.insert(frames.t, at, frames.t[at]),
+                                   p=np.insert(p, at, 0.0), valid=valid,
+                                   blocked=np.insert(frames.t < frames.t0 + warmup_s, at, False),
+                                   **inputs)
+    return contact[valid], releases, list(logic.last_events)
 
 
 def score_rules(*, forest: object, frames: Sequence[TrialFrames],
@@ -280,15 +308,10 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
         outcomes = []
         pred = []
         for f, p in zip(frames, probs):
-            logic = ReleaseLogic(rule=rule, armed=True)
-            t, p_all, valid, blocked, inputs = _decided_frames(
-                frames=f, p=p, blocked=f.t < f.t0 + warmup_s,
-                inputs=rule_inputs(names=names, x=f.x))
-            contact, releases = logic.step(t=t, p=p_all, valid=valid, blocked=blocked,
-                                           **inputs)
-            events = list(logic.last_events)
+            contact, releases, events = decide_trial(frames=f, p=p, rule=rule, names=names,
+                                                     warmup_s=warmup_s)
             outcomes.append(score_trial(truth=f.truth, releases=releases, events=events))
-            pred.append(contact[valid])
+            pred.append(contact)
         yp = np.concatenate(pred)
         tp = int(np.sum(yp & (y == 1)))
         precision = tp / max(1, int(yp.sum()))
