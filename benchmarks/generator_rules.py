@@ -62,7 +62,7 @@ from contact_detector.training.sweep import FeatureSetting, score_rules, trial_f
 from joblib import delayed, Parallel
 from lofo_calibration import cross_family_calibration, curve, score_raw_and_calibrated
 from lofo_rules import (parse_rule, print_rules, recipe_frames, recipe_rules, RECIPES,
-                        summarise)
+                        summarise, write_json)
 
 #: The generators' event kinds (``trials.json``) as the project's impact kinds. Speech, a door
 #: slam and a temperature step put no load on the hand or the table and are not impacts.
@@ -221,9 +221,7 @@ def main(argv=None) -> int:
         for set_name, frames in sets.items():
             for line in early_lines(outcomes=raw[set_name][0].outcomes, frames=frames):
                 print(line)
-    if args.json:
-        args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
-                                         'curves': curves, 'summary': summary}, indent=1))
+    write_json(args.json, rules=rules, summary=summary, curves=curves)
     return 0
 
 

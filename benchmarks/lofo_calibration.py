@@ -39,7 +39,6 @@ per rule as ``lofo_rules.py`` does. About ``groups + 1`` times the cost of ``lof
 """
 
 import argparse
-import json
 import sys
 from typing import Dict, List, Sequence
 
@@ -47,7 +46,8 @@ from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.evaluation.truth import knocked_in_air
 from contact_detector.training.sweep import (FeatureSetting, fit_forest, score_rules,
                                              setting_columns, TrialFrames)
-from lofo_rules import add_arguments, print_rules, recipe_frames, recipe_rules, summarise
+from lofo_rules import (add_arguments, print_rules, recipe_frames, recipe_rules, summarise,
+                        write_json)
 import numpy as np
 from sklearn.isotonic import IsotonicRegression
 
@@ -155,9 +155,7 @@ def main(argv=None) -> int:
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in names}
     print_rules(summary, families=args.families)
-    if args.json:
-        args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
-                                         'curves': curves, 'summary': summary}, indent=1))
+    write_json(args.json, rules=rules, summary=summary, curves=curves)
     return 0
 
 

@@ -41,7 +41,7 @@ from dataclasses import fields, replace
 import json
 from pathlib import Path
 import sys
-from typing import Dict, List, Tuple
+from typing import Dict, List, Optional, Tuple
 
 from contact_detector.evaluation.metrics import (Outcome, premature_text, summarize,
                                                  summarize_by_condition)
@@ -165,6 +165,14 @@ def print_rules(summary: Dict[str, Dict[str, object]], *, families: bool) -> Non
                           f"{f['latency_ms_p95'] or 0:.0f} ms")
 
 
+def write_json(path: Optional[Path], *, rules: Dict[str, DecisionRule], summary: dict,
+               **extra: object) -> None:
+    """Write ``--json``: the rules, ``summary`` and any ``extra`` entries; nothing without it."""
+    if path is not None:
+        path.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
+                                    **extra, 'summary': summary}, indent=1))
+
+
 def main(argv=None) -> int:
     """Run the comparison; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__,
@@ -193,9 +201,7 @@ def main(argv=None) -> int:
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in rules}
     print_rules(summary, families=args.families)
-    if args.json:
-        args.json.write_text(json.dumps({'rules': {n: r.to_dict() for n, r in rules.items()},
-                                         'summary': summary}, indent=1))
+    write_json(args.json, rules=rules, summary=summary)
     return 0
 
 
