@@ -86,12 +86,13 @@ def test_a_noise_burst_is_counted_once_and_holds_for_the_features_look_back():
         stream.noisy, stream.noise_bursts, stream.noise_until)
 
 
-def test_the_check_holds_releases_and_leaves_the_features_as_they_are():
+def test_the_check_leaves_the_features_as_they_are():
     # what training relies on when it turns the check off: the same frames either way
     t, force, torque = _noisy_reading(20.0)
-    on_t, on_x = _stream().push(t=t, force=force, torque=torque)
+    checked = _stream()
+    on_t, on_x = checked.push(t=t, force=force, torque=torque)
     off_t, off_x = _stream(noise_jump_n=0.0).push(t=t, force=force, torque=torque)
-    assert on_x.shape[0] > 100
+    assert checked.noise_bursts == 1 and on_x.shape[0] > 100
     np.testing.assert_array_equal(on_t, off_t)
     np.testing.assert_array_equal(on_x, off_x)
 
