@@ -21,10 +21,13 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ['ROS_STATIC_PEERS'] = ''
 os.environ.setdefault('ROS_DOMAIN_ID', str(10 + os.getpid() % 90))
 # Under pytest-xdist (tools/test.sh runs two workers) each worker gets a domain of its own, so
-# two node tests running at once never hear each other's topics.
-if os.environ.get('PYTEST_XDIST_WORKER', '').startswith('gw'):
+# two node tests running at once never hear each other's topics. Once per worker: a pytest the
+# worker starts (colcon test) inherits the domain and the marker. Fast DDS takes 0-232.
+_worker = os.environ.get('PYTEST_XDIST_WORKER', '')
+if _worker.startswith('gw') and os.environ.get('CONTACT_DETECTOR_TEST_WORKER') != _worker:
+    os.environ['CONTACT_DETECTOR_TEST_WORKER'] = _worker
     os.environ['ROS_DOMAIN_ID'] = str(
-        int(os.environ['ROS_DOMAIN_ID']) + 100 + int(os.environ['PYTEST_XDIST_WORKER'][2:]))
+        (int(os.environ['ROS_DOMAIN_ID']) + 100 + int(_worker[2:])) % 233)
 os.environ.setdefault('MPLBACKEND', 'Agg')
 
 
