@@ -58,9 +58,10 @@ from contact_detector.io.sensor_stream import load_events
 from contact_detector.model.shipped import default_ft_model_path, default_model_path
 from contact_detector.model.storage import load_bundle
 from contact_detector.training.protocol import labels_for, LabelWindow
+from contact_detector.training.recipe import NO_AUDIO_RATE
 from contact_detector.training.sweep import FeatureSetting, score_rules, trial_frames
 from joblib import delayed, Parallel
-from lofo_calibration import cross_family_calibration, curve, score_raw_and_calibrated
+from lofo_calibration import CalibratedForest, cross_family_calibration, curve
 from lofo_rules import (parse_rule, print_rules, recipe_frames, recipe_rules, RECIPES,
                         summarise, write_json)
 
@@ -103,7 +104,7 @@ def recording_frames(*, bag: Path, onset: float, name: str, family: str, events:
                     if kind in EVENT_KINDS)
     truth = Truth(name=name, condition=family, onset_t=float(onset), impacts=impacts)
     return trial_frames(events=loaded, truth=truth, config=config,
-                        audio_rate=streams.audio_rate or 16000.0,
+                        audio_rate=streams.audio_rate or NO_AUDIO_RATE,
                         wrench_rate=streams.wrench_rate)
 
 
@@ -200,10 +201,11 @@ def main(argv=None) -> int:
             curves[seed] = curve(calibration)
             print(f'seed {seed}: g(0, 0.1, ..., 1) = {curves[seed]}', file=sys.stderr,
                   flush=True)
+            calibrated = CalibratedForest(forest=forest, calibration=calibration)
             for set_name, frames in sets.items():
-                rows[set_name] += score_raw_and_calibrated(
-                    forest=forest, calibration=calibration, frames=frames, setting=scored,
-                    rules=rules)
+                # the raw rows are the same for every seed: scored once, above
+                rows[set_name] += raw[set_name] + score_rules(
+                    forest=calibrated, frames=frames, setting=scored, rules=list(rules.values()))
     outcomes: Dict[str, Dict[str, List]] = {s: {n: [] for n in names} for s in [*sets, 'all']}
     for set_name, set_rows in rows.items():
         # with several seeds the rows repeat the names in turn: outcomes add up over seeds

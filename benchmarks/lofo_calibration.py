@@ -44,8 +44,8 @@ from typing import Dict, List, Sequence
 
 from contact_detector.evaluation.metrics import frame_labels
 from contact_detector.evaluation.truth import knocked_in_air
-from contact_detector.training.sweep import (FeatureSetting, fit_forest, score_rules,
-                                             setting_columns, TrialFrames)
+from contact_detector.training.sweep import (FeatureSetting, fit_forest, p_contact,
+                                             score_rules, setting_columns, TrialFrames)
 from lofo_rules import (add_arguments, print_rules, recipe_frames, recipe_rules, summarise,
                         write_json)
 import numpy as np
@@ -56,8 +56,7 @@ class CalibratedForest:
     """
     A fitted forest whose P(contact) passes through a fitted ``IsotonicRegression``.
 
-    ``forest`` is a scikit-learn forest (``predict_proba`` gives both classes, shape (n, 2))
-    or a ``CompiledForest`` (P(contact) alone, shape (n,)).
+    ``forest`` is a scikit-learn forest or a ``CompiledForest`` (``training.sweep.p_contact``).
     """
 
     def __init__(self, *, forest: object, calibration: IsotonicRegression) -> None:
@@ -66,8 +65,7 @@ class CalibratedForest:
 
     def predict_proba(self, x: np.ndarray) -> np.ndarray:
         """Return ``[1 - g(P), g(P)]`` per row, shape ``(n, 2)``."""
-        p = np.asarray(self.forest.predict_proba(x))
-        p = self.calibration.predict(p[:, 1] if p.ndim == 2 else p)
+        p = self.calibration.predict(p_contact(self.forest, x))
         return np.column_stack([1.0 - p, p])
 
 

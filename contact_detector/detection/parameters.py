@@ -32,6 +32,7 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 
 from contact_detector.detection.release import rule_overrides
 from contact_detector.errors import ConfigError
+from contact_detector.features.noise import NOISE_JUMP_N
 from contact_detector.io.messages import (AUDIO_MSG_TYPES, MAX_SAMPLE_RATE, MIN_SAMPLE_RATE,
                                           normalise_msg_type)
 from contact_detector.io.node_params import read_node_params
@@ -114,7 +115,7 @@ PARAMS: Sequence[ParamSpec] = (
               'an empty hand. ~/zero_sensor measures and sets it; a change restarts the stream '
               'state (warm-up). Zero the sensor with the empty hand, never while it holds the '
               'object.', -10000.0, 10000.0, read_only=False),
-    ParamSpec('wrench.noise_jump', 15.0, 'A force reading whose median jump over 0.1 s is '
+    ParamSpec('wrench.noise_jump', NOISE_JUMP_N, 'A force reading whose median jump over 0.1 s is '
               'at least this, N, while it reverses direction from sample to sample '
               '(interference, a loose connector) is noise: no frame whose F/T features saw it '
               'releases (0.64 s after it with the shipped models; 0 = off).', 0.0, 1000.0),

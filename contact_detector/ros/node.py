@@ -570,23 +570,20 @@ class DetectorWiring(DiagnosticsMixin):
             self._carried_seen = carried
             if carried is not None:
                 self._log_carried(carried)
-        placeholders = self.detector.extractor.ft.placeholders
-        if placeholders != self._placeholders_seen:
-            if placeholders > self._placeholders_seen:
-                self._warn('wrench-placeholder', 'F/T sample with a force or torque of exactly '
-                           f'(0, 0, 0) after a load dropped ({placeholders} so far): '
-                           "the driver's placeholder for a missing reading, not a measurement")
-            self._placeholders_seen = placeholders
-        bursts = self.detector.extractor.ft.noise_bursts
-        if bursts != self._noise_bursts_seen:
-            if bursts > self._noise_bursts_seen:
-                ft = self.detector.extractor.ft
-                self._warn('wrench-noise', 'F/T reading noisy: the force jumps back and forth by '
-                           f'{ft.noise_level:.1f} N per sample (median over 0.1 s; '
-                           f'{ft.noisy} noisy samples so far): interference or a loose '
-                           'connector, not a load; no release for '
-                           f'{ft.noise_hold_s:.2f} s after it')
-            self._noise_bursts_seen = bursts
+        # the counts restart with the stream (a reset), so each is followed down as well
+        ft = self.detector.extractor.ft
+        if ft.placeholders > self._placeholders_seen:
+            self._warn('wrench-placeholder', 'F/T sample with a force or torque of exactly '
+                       f'(0, 0, 0) after a load dropped ({ft.placeholders} so far): '
+                       "the driver's placeholder for a missing reading, not a measurement")
+        self._placeholders_seen = ft.placeholders
+        if ft.noise_bursts > self._noise_bursts_seen:
+            self._warn('wrench-noise', 'F/T reading noisy: the force jumps back and forth by '
+                       f'{ft.noise_level:.1f} N per sample (median over 0.1 s; '
+                       f'{ft.noisy} noisy samples so far): interference or a loose '
+                       'connector, not a load; no release for '
+                       f'{ft.noise_hold_s:.2f} s after it')
+        self._noise_bursts_seen = ft.noise_bursts
         zero = self.detector.zero_measurement
         if zero is not self._zero_seen:
             self._zero_seen = zero

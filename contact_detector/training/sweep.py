@@ -232,8 +232,8 @@ def fit_forest(*, frames: Sequence[TrialFrames], setting: FeatureSetting, n_esti
     return forest.fit(x, y, sample_weight=weights)
 
 
-def _p_contact(forest: object, x: np.ndarray) -> np.ndarray:
-    """P(contact) per row from a scikit-learn forest or a CompiledForest (bit-identical)."""
+def p_contact(forest: object, x: np.ndarray) -> np.ndarray:
+    """Return P(contact) per row, shape (n,), of a scikit-learn forest or a CompiledForest."""
     if isinstance(forest, CompiledForest):
         return forest.predict_proba(x)
     return forest.predict_proba(x)[:, 1]
@@ -298,7 +298,7 @@ def score_rules(*, forest: object, frames: Sequence[TrialFrames],
     if any(rule.uses_load for rule in rules) and not set(RULE_FEATURES) <= set(names):
         raise ConfigError(f'a rule with the load path needs the {" and ".join(RULE_FEATURES)} '
                           f'columns, which setting {setting.name} does not compute')
-    probs = [_p_contact(forest, f.x[:, cols]) if f.x.shape[0] else np.zeros(0)
+    probs = [p_contact(forest, f.x[:, cols]) if f.x.shape[0] else np.zeros(0)
              for f in frames]
     labels = [frame_labels(t=f.t, onsets=[f.truth.onset_t], start_s=setting.label.start_s,
                            end_s=setting.label.end_s) for f in frames]
