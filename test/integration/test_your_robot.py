@@ -28,9 +28,12 @@ from contact_detector.cli import evaluate as evaluate_cli
 from contact_detector.cli import simulate as simulate_cli
 from contact_detector.cli import train as train_cli
 from contact_detector.evaluation.metrics import score_onsets, score_trial, Truth
+from contact_detector.io.bags import read_wrench
+from contact_detector.io.discovery import discover_streams
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trials
 from contact_detector.sim.bag_writer import write_trial_bag
+import numpy as np
 import pytest
 from rosbags.rosbag1 import Reader
 
@@ -344,3 +347,52 @@ def test_train_weighs_the_frames_of_simulated_events_with_event_weight(tmp_path)
     assert models['1'].forest_sha256 != models['5'].forest_sha256
     assert train_cli.main([str(bags), '--event-weight', '0.5', '--out',
                            str(tmp_path / 'bad.npz')]) == 1
+
+
+def _hiro_trial(folder: Path, *, states: str, ramp_n_per_s: float = 10.0) -> None:
+    """One trial as HongminWu/HIRO_SA_DATA lays it out: 6 s at 200 Hz, a rise from 3 s."""
+    folder.mkdir(parents=True)
+    t = np.arange(1200) * 0.005
+    rng = np.random.default_rng(3)
+    wrench = rng.normal(0.0, 0.02, (len(t), 6))
+    wrench[:, 2] -= ramp_n_per_s * np.clip(t - 3.0, 0.0, None)
+    np.savetxt(folder / 'R_Torques.dat', np.column_stack([t, wrench]), delimiter='\t')
+    (folder / 'R_State.dat').write_text(states)
+
+
+@pytest.mark.parametrize('quiet_audio', [False, True])
+def test_the_hiro_recordings_become_labelled_bags_evaluate_decides(tmp_path, quiet_audio):
+    # tools/hiro_to_bags.py: docs/your-robot.md's real 200 Hz recordings of a part lowered
+    # onto a fixture, here as a synthetic trial in the data set's layout
+    src = tmp_path / 'HIRO_SA_DATA'
+    _hiro_trial(src / 'REAL_HIRO_ONE_SA_SUCCESS' / 'S-01', states='0.0\n3.5\n5.0\n5.5\n')
+    _hiro_trial(src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-01', states='0.0\n3.3\n')
+    _hiro_trial(src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-02', states='')
+    out = tmp_path / 'bags'
+    done = subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src, out,
+                           *(['--quiet-audio'] if quiet_audio else [])],
+                          capture_output=True, text=True, check=True)
+    assert 'no contact phase, not converted: E-02' in done.stderr
+    rows = [line.split(',') for line in (out / 'labels.csv').read_text().splitlines()[1:]]
+    assert [r[0] for r in rows] == ['success/S-01', 'error/E-01']
+    # the rise passes the 0.3 N band 30 ms after it began, at 3.030-3.035 s
+    for _, start, end in rows:
+        assert 1_700_000_003.025 <= float(start) == float(end) <= 1_700_000_003.040
+    found = discover_streams(out / 'success' / 'S-01', allow_no_audio=True)
+    assert found.wrench_rate == pytest.approx(200.0)
+    assert found.has_audio == quiet_audio
+    series = read_wrench(out / 'success' / 'S-01')
+    assert len(series.t) == 1200
+    assert series.force[-1, 2] == pytest.approx(-30.0, abs=0.1)
+    # the 2 N guard is past 2 N 0.2 s after the label: both trials caught
+    report = tmp_path / 'report'
+    assert evaluate_cli.main([str(out / 'success'), str(out / 'error'), '--labels',
+                              str(out / 'labels.csv'), '--detector', 'guard', '--report',
+                              str(report)]) == 0
+    summary = json.loads((report / 'metrics.json').read_text())['guard']['summary']['all']
+    assert (summary['trials'], summary['detected'], summary['premature']) == (2, 2, 0)
+    assert 150 <= summary['latency_ms_median'] <= 200
+    # a second run into the same folder refuses rather than mixing two conversions
+    again = subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src, out],
+                           capture_output=True, text=True)
+    assert again.returncode == 1 and 'exists; give an empty OUT' in again.stderr
