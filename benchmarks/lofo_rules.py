@@ -17,7 +17,7 @@ Variants of a shipped model's decision rule, each family left out, with the knoc
 
     .venv/bin/python benchmarks/lofo_rules.py DIR... [--recipe ft-only|multimodal]
         [--rule NAME:FIELD=VALUE[,FIELD=VALUE...]]... [--seeds 0,1,2] [--jobs 2]
-        [--families] [--json out.json] [--splitter best|random]
+        [--families] [--json out.json] [--splitter best|random] [--drop GROUP]...
 
 Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
 setting, labels, wrench augmentation and event weight: ``ft-only`` is
@@ -33,7 +33,8 @@ Prints one line per rule: caught within 500 ms and early over all families, the 
 is in the air (issue #16's safety figure: caught, early, median latency); ``--families`` adds
 one line per family. Every rule is scored with the same forests, so their differences are the
 rule's alone. About 4 minutes per seed on the F/T-only pool of docs/offline.md (360 trials) on
-two cores.
+two cores. ``--drop GROUP`` trains and scores the forests without a feature group of
+:data:`GROUPS` (``benchmarks/generator_ablation.py``).
 """
 
 import argparse
@@ -41,7 +42,7 @@ from dataclasses import fields, replace
 import json
 from pathlib import Path
 import sys
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from contact_detector.evaluation.metrics import (Outcome, premature_text, summarize,
                                                  summarize_by_condition)
@@ -59,6 +60,35 @@ RECIPES = {
     'ft-only': ('ft-only+signed+carried+aug', DEFAULT_FT_ONLY_RULE, True),
     'multimodal': ('shipped+aug', DEFAULT_RULE, False),
 }
+
+
+#: Feature groups by name: a feature belongs to a group if the test holds for its name.
+GROUPS = {
+    'audio_abs': lambda n: n == 'audio_power',
+    'ft_spectral': lambda n: n.split('_', 1)[1] in ('centroid', 'spread', 'flux'),
+    'audio_db': lambda n: n.startswith('audio_') and n.endswith('_db'),
+    'change': lambda n: n.split('_', 1)[1] in ('change', 'change_max'),
+    'shift': lambda n: n.split('_', 1)[1] in ('shift', 'shift_min', 'shift_max'),
+    'carried': lambda n: n.split('_', 1)[1] in ('shift_rel', 'carried_cos'),
+    'torque': lambda n: n.startswith('torque_'),
+}
+
+
+def candidate_columns(columns: Sequence[str], *, drops: Sequence[str]) -> tuple:
+    """
+    Return ``columns`` without the features of every group in ``drops``.
+
+    A ``ValueError`` if a group is unknown or takes nothing out of ``columns``.
+    """
+    kept = tuple(columns)
+    for group in drops:
+        if group not in GROUPS:
+            raise ValueError(f'unknown group {group!r}; known: {", ".join(GROUPS)}')
+        fewer = tuple(n for n in kept if not GROUPS[group](n))
+        if len(fewer) == len(kept):
+            raise ValueError(f'group {group!r} takes no feature out of {", ".join(kept)}')
+        kept = fewer
+    return kept
 
 
 def parse_rule(text: str, *, base: DecisionRule) -> Tuple[str, DecisionRule]:
@@ -181,8 +211,14 @@ def main(argv=None) -> int:
     parser.add_argument('--splitter', choices=SPLITTERS, default='best',
                         help="the forests' trees: 'best' (the shipped random forests) or "
                              "'random' (extremely randomized trees)")
+    parser.add_argument('--drop', action='append', default=[], choices=sorted(GROUPS),
+                        help='a feature group the forests leave out (generator_ablation.py)')
     args = parser.parse_args(argv)
     setting, rules = recipe_rules(args, parser)
+    try:
+        setting = replace(setting, columns=candidate_columns(setting.columns, drops=args.drop))
+    except ValueError as err:
+        parser.error(str(err))
     frames, fit = recipe_frames(args, setting)
     keys = list(frames)
     outcomes = {name: [] for name in rules}

@@ -135,3 +135,42 @@ def test_generator_rules_scores_the_model_as_evaluate_does_and_blames_the_events
     assert kinds & set(generator_rules.EVENT_KINDS)
     assert set(generator_rules.EVENT_KINDS.values()) <= {'hand', 'table', 'touch', 'brush',
                                                          'setdown'}
+
+
+def test_generator_ablation_leaves_a_group_out_and_pools_a_generators_families(tmp_path):
+    # benchmarks/generator_ablation.py, the screen of
+    # docs/decisions/2026-12-07-feature-groups-on-the-generators.md
+    out = tmp_path / 'B7'
+    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
+                    '--trials-per-family', '2', '--seed', '7', '--families',
+                    'hsr_side,tiago_mobile', '--jobs', '1'], check=True, capture_output=True)
+    train = tmp_path / 'train'
+    assert simulate_cli.main([str(train), '--trials', '12', '--seed', '5', '--conditions',
+                              'wide', '--quiet']) == 0
+    counts = tmp_path / 'ablation.json'
+    done = subprocess.run([sys.executable, BENCHMARKS / 'generator_ablation.py', out,
+                           '--train', train, '--drop', 'torque', '--union', 'torque+audio_abs',
+                           '--seeds', '0,1', '--jobs', '1', '--json', counts],
+                          cwd=tmp_path, capture_output=True, text=True, check=True)
+    candidates = json.loads(counts.read_text())['candidates']
+    assert list(candidates) == ['F', '-torque', '-torque-audio_abs']
+    shipped = load_bundle(path=Path(__file__).parents[2] / 'models' / 'contact_forest.npz')
+    assert candidates['F']['columns'] == list(shipped.feature_names)
+    assert candidates['-torque']['columns'] == [
+        n for n in shipped.feature_names if not n.startswith('torque_')]
+    assert candidates['-torque-audio_abs']['columns'] == candidates['-torque']['columns'][1:]
+    for figures in candidates.values():
+        by_family = figures['by_family']
+        # both seeds' forests decide each of the four recordings; a family spans the sets
+        assert by_family['all']['trials'] == 8
+        assert set(by_family) == {'all', 'B/hsr_side', 'B/tiago_mobile'}
+        assert figures['worst'] in by_family
+        assert by_family['all']['score'] == pytest.approx(
+            (by_family['all']['detected'] - by_family['all']['premature']) / 8)
+    assert done.stdout.count(' features): all ') == 3
+    # a group the recipe does not have is refused before any work
+    refused = subprocess.run([sys.executable, BENCHMARKS / 'generator_ablation.py', out,
+                              '--train', train, '--recipe', 'ft-only', '--drop', 'audio_abs'],
+                             cwd=tmp_path, capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert "group 'audio_abs' takes no feature out of" in refused.stderr
