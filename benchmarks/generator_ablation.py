@@ -80,7 +80,8 @@ def main(argv=None) -> int:
                         help="the recipe's simulated training folders")
     parser.add_argument('--recipe', choices=sorted(RECIPES), default='multimodal')
     parser.add_argument('--drop', action='append', default=[], choices=sorted(GROUPS),
-                        help='a group to leave out (default: each group in turn)')
+                        help="a group to leave out (default: each group of the recipe's "
+                             'features in turn)')
     parser.add_argument('--union', action='append', default=[],
                         help='groups left out together, joined by +')
     parser.add_argument('--seeds', default='0,1,2')
@@ -94,7 +95,8 @@ def main(argv=None) -> int:
     setting, rules = recipe_rules(pool, parser)
     rule = rules['S']
     candidates: Dict[str, List[str]] = {'F': []}
-    for group in args.drop or list(GROUPS):
+    # by default each group the recipe's features have (an F/T-only recipe has no audio)
+    for group in args.drop or [g for g in GROUPS if any(map(GROUPS[g], setting.columns))]:
         candidates[f'-{group}'] = [group]
     for text in args.union:
         candidates['-' + '-'.join(text.split('+'))] = text.split('+')

@@ -21,7 +21,7 @@ Their defaults are the shipped recipe's (:mod:`contact_detector.training.recipe`
 import argparse
 from typing import Callable, Optional, Tuple, TypeVar
 
-from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig
+from contact_detector.features.config import EXTRA_FEATURES, FeatureConfig, TORQUE_FEATURES
 from contact_detector.model.rule import DecisionRule, LOAD2_FIELDS, LOAD_FIELDS, STEADY_FRAMES
 from contact_detector.training.augmentation import scale_range, WrenchAugmentation
 from contact_detector.training.protocol import LabelWindow
@@ -81,6 +81,12 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--no-audio', action='store_true',
                         help='an F/T-only model (robots without a microphone): no audio '
                              'column, one frame per F/T feature frame')
+    parser.add_argument('--torque', action=argparse.BooleanOptionalAction, default=None,
+                        help="the torque columns; --no-torque: a force-only model (the paper's "
+                             'three torque columns and the torque extra features leave the '
+                             'defaults; one named in --extra-features is refused; default '
+                             f"{'--torque' if m.torque else '--no-torque'}; with --no-audio "
+                             f"{'--torque' if f.torque else '--no-torque'})")
     parser.add_argument('--label-start', type=float, default=None,
                         help='label window start after the onset, s (default '
                              f'{m.labels.start_s:g}; with --no-audio {f.labels.start_s:g})')
@@ -201,11 +207,14 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:
     """Build the FeatureConfig from parsed options."""
     no_audio = bool(getattr(args, 'no_audio', False))
+    torque = _given(getattr(args, 'torque', None), default=_defaults(args).torque)
     if args.extra_features is None:
-        extra = _defaults(args).extra_features
+        extra = tuple(e for e in _defaults(args).extra_features
+                      if torque or e not in TORQUE_FEATURES)
     else:
         extra = tuple(e for e in args.extra_features.split(',') if e)
-    return FeatureConfig(audio=not no_audio, ft_window=args.ft_window, ft_hop=args.ft_hop,
+    return FeatureConfig(audio=not no_audio, torque=torque, ft_window=args.ft_window,
+                         ft_hop=args.ft_hop,
                          ft_detrend=args.ft_detrend, ft_window_fn=args.ft_window_fn,
                          delta_window=args.delta_window, delta_lag=args.delta_lag,
                          baseline_window=args.baseline_window, rise_frames=args.rise_frames,

@@ -292,7 +292,8 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
                                                     ft_input_rate=ft_input_rate)
         x = np.zeros((ft_times.size, len(names)))
         for j, name in enumerate(columns):
-            x[:, names.index(name)] = ft_x[:, j]
+            if name in names:       # the torque columns of a force-only configuration are not
+                x[:, names.index(name)] = ft_x[:, j]
         return FeatureFrames(t=ft_times, x=x, valid=np.ones(ft_times.size, dtype=bool),
                              names=names)
     t_a, power = batch_audio_power(config=config, audio=audio, audio_rate=audio_rate,
@@ -323,5 +324,6 @@ def batch_features(*, config: FeatureConfig, audio: np.ndarray, audio_rate: floa
         if before.size and t - ft_times[before[-1]] <= age:
             valid[i] = True
             for j, name in enumerate(columns):
-                x[i, names.index(name)] = ft_x[before[-1], j]
+                if name in names:
+                    x[i, names.index(name)] = ft_x[before[-1], j]
     return FeatureFrames(t=t_a, x=x, valid=valid, names=names)

@@ -197,6 +197,13 @@ CARRIED_SHIFT_COS_FEATURES = ('force_carried_shift_cos', 'torque_carried_shift_c
 #: roughness ``shift_lag`` samples earlier (computed with the vector shifts).
 ROUGH_FEATURES = ('force_roughness', 'force_roughness_rel')
 
+#: Every feature that reads the torque: the paper's three torque columns, every extra
+#: ``torque_*`` feature and the angles and lever arm that compare the torque with the force.
+#: A configuration with ``torque=False`` has none of them.
+TORQUE_FEATURES = (tuple(n for n in PAPER_FEATURES if n.startswith('torque_'))
+                   + tuple(n for n in EXTRA_FEATURES if n.startswith('torque_'))
+                   + ('ft_delta_angle', 'ft_change_angle', 'ft_carried_lever'))
+
 #: Every feature that needs the carried load (measured after a start or an arming).
 NEEDS_CARRIED = (CARRIED_FEATURES + CARRIED_DERIVED + CARRIED_SHIFT_FEATURES
                  + CARRIED_SHIFT_COS_FEATURES)
@@ -295,6 +302,11 @@ class FeatureConfig:
         Whether the vector has audio columns. False: no ``audio_power`` column and no audio
         extra feature (refused); rows are then clocked by the F/T feature frames, one row per
         F/T feature frame, for robots without a microphone.
+    torque : bool
+        Whether the vector has torque columns. False: none of :data:`TORQUE_FEATURES` (the
+        paper's three torque columns leave the vector, a torque extra feature is refused); the
+        forest reads the force alone, whose changes do not depend on the lever arm of the
+        contact (written by :meth:`to_dict` only when false).
     hold_frames : int
         F/T feature frames over which ``*_change_hold`` and ``*_shift_hold`` see whether a
         change held (default 4, 40 ms at 100 Hz; written by :meth:`to_dict` only when it
@@ -346,6 +358,7 @@ class FeatureConfig:
     shift_lag: int = 20
     shift_window: int = 40
     audio: bool = True
+    torque: bool = True
     hold_frames: int = DEFAULT_HOLD_FRAMES
     carried_window: int = DEFAULT_CARRIED['carried_window']
     carried_floor_force: float = DEFAULT_CARRIED['carried_floor_force']
@@ -387,6 +400,12 @@ class FeatureConfig:
                               f'{EXTRA_FEATURES}, got {self.extra_features!r}')
         if not isinstance(self.audio, bool):
             raise ConfigError(f'FeatureConfig.audio must be true or false, got {self.audio!r}')
+        if not isinstance(self.torque, bool):
+            raise ConfigError(f'FeatureConfig.torque must be true or false, got {self.torque!r}')
+        torque_extra = [n for n in self.extra_features if n in TORQUE_FEATURES]
+        if not self.torque and torque_extra:
+            raise ConfigError(f'FeatureConfig.torque is false (a force-only model) but '
+                              f'extra_features has the torque features {torque_extra}')
         audio_extra = [n for n in self.extra_features if n in AUDIO_FEATURES]
         if not self.audio and audio_extra:
             raise ConfigError(f'FeatureConfig.audio is false (an F/T-only model) but '
@@ -431,8 +450,15 @@ class FeatureConfig:
 
     @property
     def feature_names(self) -> tuple:
-        """Names of the feature vector's columns, in order (no ``audio_power`` if F/T-only)."""
-        paper = PAPER_FEATURES if self.audio else PAPER_FEATURES[1:]
+        """
+        Names of the feature vector's columns, in order.
+
+        The paper's seven, without ``audio_power`` if F/T-only and without the torque columns
+        if ``torque`` is false, then the extra features.
+        """
+        paper = tuple(n for n in PAPER_FEATURES
+                      if (self.audio or n != 'audio_power')
+                      and (self.torque or n not in TORQUE_FEATURES))
         return paper + self.extra_features
 
     @property
@@ -488,6 +514,8 @@ class FeatureConfig:
         if self.audio:
             # Configs written before the field existed, and their model hashes, stay the same.
             del data['audio']
+        if self.torque:
+            del data['torque']
         if self.hold_frames == DEFAULT_HOLD_FRAMES:
             del data['hold_frames']
         if self.audio_hold_frames == DEFAULT_AUDIO_HOLD_FRAMES:

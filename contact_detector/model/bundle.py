@@ -234,11 +234,14 @@ class ModelBundle:
 
         E.g. ``rf8-paper7-3fa2c1d09b``, or ``rf8-paper7+force_delta-...`` with extra features.
         The hash is :attr:`forest_sha256`, so the npz, joblib and skops files of one forest
-        share the id. An F/T-only model's set starts with ``ft6`` (the paper's six F/T columns).
+        share the id. An F/T-only model's set starts with ``ft6`` (the paper's six F/T columns);
+        without the torque columns (``FeatureConfig.torque`` false) ``paper4`` and ``ft3``.
         Extremely randomized trees (``training['splitter']`` ``'random'``, ``train --splitter
         random``) are ``et<trees>``.
         """
-        base = 'ft6' if self.feature_config.ft_only else 'paper7'
+        paper = self.feature_config.feature_names[:-len(self.feature_config.extra_features)
+                                                  or None]
+        base = f'ft{len(paper)}' if self.feature_config.ft_only else f'paper{len(paper)}'
         feature_set = '+'.join((base,) + tuple(self.feature_config.extra_features))
         kind = 'et' if self.training.get('splitter') == 'random' else 'rf'
         return f'{kind}{self.n_estimators}-{feature_set}-{self.forest_sha256[:10]}'

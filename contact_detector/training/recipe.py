@@ -120,6 +120,8 @@ class RecipeDefaults:
     extra_features: Tuple[str, ...]
     labels: LabelWindow
     augmentation: WrenchAugmentation
+    #: Whether the vector has the torque columns (``FeatureConfig.torque``).
+    torque: bool = True
 
 
 def recipe_defaults(*, ft_only: bool) -> RecipeDefaults:
@@ -135,7 +137,7 @@ def recipe_defaults(*, ft_only: bool) -> RecipeDefaults:
         return RecipeDefaults(extra_features=DEFAULT_FT_ONLY_EXTRA, labels=DEFAULT_FT_ONLY_LABELS,
                               augmentation=DEFAULT_FT_ONLY_AUGMENTATION)
     return RecipeDefaults(extra_features=DEFAULT_FEATURES.extra_features, labels=DEFAULT_LABELS,
-                          augmentation=DEFAULT_AUGMENTATION)
+                          augmentation=DEFAULT_AUGMENTATION, torque=DEFAULT_FEATURES.torque)
 
 
 def sim_parts(*, n: int, seed: int, ft_rate: float, audio_rate: int) -> Dict[str, dict]:
