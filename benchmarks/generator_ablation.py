@@ -44,6 +44,7 @@ import sys
 from typing import Dict, List
 
 from contact_detector.evaluation.metrics import summarize_by_condition
+from contact_detector.features.config import AUDIO_FEATURES
 from contact_detector.training.recipe import recipe_defaults
 from contact_detector.training.sweep import fit_forest, score_rules
 from generator_rules import set_frames
@@ -94,6 +95,12 @@ def main(argv=None) -> int:
     pool = argparse.Namespace(folders=args.train, jobs=args.jobs, recipe=args.recipe, rule=[])
     setting, rules = recipe_rules(pool, parser)
     rule = rules['S']
+    if RECIPES[args.recipe][2]:
+        # sweep --lofo scores the F/T-only setting on audio frames; the shipped model and these
+        # recordings (some without audio) are clocked by the F/T stream, as train --no-audio
+        setting = replace(setting, config=replace(
+            setting.config, audio=False, extra_features=tuple(
+                e for e in setting.config.extra_features if e not in AUDIO_FEATURES)))
     candidates: Dict[str, List[str]] = {'F': []}
     # by default each group the recipe's features have (an F/T-only recipe has no audio)
     for group in args.drop or [g for g in GROUPS if any(map(GROUPS[g], setting.columns))]:

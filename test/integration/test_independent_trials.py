@@ -174,3 +174,27 @@ def test_generator_ablation_leaves_a_group_out_and_pools_a_generators_families(t
                              cwd=tmp_path, capture_output=True, text=True)
     assert refused.returncode == 2
     assert "group 'audio_abs' takes no feature out of" in refused.stderr
+
+
+def test_generator_ablation_decides_recordings_without_a_microphone_for_the_ft_only_recipe(
+        tmp_path):
+    # the F/T-only recipe's frames are clocked by the F/T stream, as the shipped F/T-only
+    # model's: heavy_slow has no microphone and must be decided, not left without frames
+    out = tmp_path / 'B8'
+    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
+                    '--trials-per-family', '3', '--seed', '8', '--families',
+                    'heavy_slow,ur5e_guarded', '--jobs', '1'], check=True, capture_output=True)
+    train = tmp_path / 'train'
+    assert simulate_cli.main([str(train), '--trials', '12', '--seed', '6', '--conditions',
+                              'wide', '--events', 'everywhere', '--quiet']) == 0
+    counts = tmp_path / 'ablation.json'
+    subprocess.run([sys.executable, BENCHMARKS / 'generator_ablation.py', out, '--train', train,
+                    '--recipe', 'ft-only', '--drop', 'torque', '--seeds', '0', '--jobs', '1',
+                    '--json', counts], cwd=tmp_path, capture_output=True, text=True, check=True)
+    candidates = json.loads(counts.read_text())['candidates']
+    shipped = load_bundle(path=Path(__file__).parents[2] / 'models' / 'contact_forest_ft.npz')
+    assert candidates['F']['columns'] == list(shipped.feature_names)
+    for figures in candidates.values():
+        slow = figures['by_family']['B/heavy_slow']
+        assert slow['trials'] == 3
+        assert slow['missed'] < 3, 'no release at all: the recordings had no frames'
