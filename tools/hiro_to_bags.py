@@ -151,20 +151,32 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               f'{{{",".join(GROUPS)}}}', file=sys.stderr)
         return 1
     rng = np.random.default_rng(0) if args.quiet_audio else None
-    rows, skipped = ['bag,onset_start,onset_end'], []
+    rows, skipped, unreadable = ['bag,onset_start,onset_end'], [], []
     for folder, family in trials:
         states = (folder / 'R_State.dat').read_text().split() if (
             folder / 'R_State.dat').is_file() else []
-        table = np.loadtxt(folder / 'R_Torques.dat', ndmin=2)
-        if len(states) < 2 or table.shape[1] < 7:
+        try:
+            table = np.loadtxt(folder / 'R_Torques.dat', ndmin=2)
+            detected_s = float(states[1]) if len(states) >= 2 else None
+        except ValueError as err:
+            print(f'hiro_to_bags: {folder.name}: not a table of numbers: {err}',
+                  file=sys.stderr)
+            unreadable.append(folder.name)
+            continue
+        if detected_s is None:
             skipped.append(folder.name)
+            continue
+        if table.shape[1] < 7 or len(table) < 2:
+            print(f'hiro_to_bags: {folder.name}: R_Torques.dat needs rows of t and 6 wrench '
+                  f'values, got {table.shape[1]} columns and {len(table)} rows', file=sys.stderr)
+            unreadable.append(folder.name)
             continue
         t, wrench = table[:, 0], table[:, 1:7]
         try:
-            onset = contact_onset(t=t, force=wrench[:, :3], detected_s=float(states[1]))
+            onset = contact_onset(t=t, force=wrench[:, :3], detected_s=detected_s)
         except ValueError as err:
             print(f'hiro_to_bags: {folder.name}: {err}', file=sys.stderr)
-            skipped.append(folder.name)
+            unreadable.append(folder.name)
             continue
         bag = args.out / family / folder.name
         if bag.exists():
@@ -178,7 +190,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if skipped:
         print(f'hiro_to_bags: no contact phase, not converted: {", ".join(skipped)}',
               file=sys.stderr)
-    print(f'{len(rows) - 1} bags and labels.csv -> {args.out}')
+    print(f'{len(rows) - 1} bags and labels.csv -> {args.out}'
+          + (f'; {len(unreadable)} trial folders not converted (above)' if unreadable else ''))
     return 0
 
 

@@ -368,11 +368,16 @@ def test_the_hiro_recordings_become_labelled_bags_evaluate_decides(tmp_path, qui
     _hiro_trial(src / 'REAL_HIRO_ONE_SA_SUCCESS' / 'S-01', states='0.0\n3.5\n5.0\n5.5\n')
     _hiro_trial(src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-01', states='0.0\n3.3\n')
     _hiro_trial(src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-02', states='')
+    _hiro_trial(src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-03', states='0.0\n3.3\n')
+    (src / 'REAL_HIRO_ONE_SA_ERROR_CHARAC' / 'E-03' / 'R_Torques.dat').write_text('0 1 x\n')
     out = tmp_path / 'bags'
     done = subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src, out,
                            *(['--quiet-audio'] if quiet_audio else [])],
                           capture_output=True, text=True, check=True)
     assert 'no contact phase, not converted: E-02' in done.stderr
+    assert 'E-03: not a table of numbers' in done.stderr
+    assert '2 bags and labels.csv' in done.stdout
+    assert '1 trial folders not converted' in done.stdout
     rows = [line.split(',') for line in (out / 'labels.csv').read_text().splitlines()[1:]]
     assert [r[0] for r in rows] == ['success/S-01', 'error/E-01']
     # the rise passes the 0.3 N band 30 ms after it began, at 3.030-3.035 s
