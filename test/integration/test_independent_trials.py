@@ -137,16 +137,24 @@ def test_generator_rules_scores_the_model_as_evaluate_does_and_blames_the_events
                                                          'setdown'}
 
 
+def _ablation_inputs(tmp_path: Path, *, name: str, per_family: int, families: str,
+                     train_seed: int, events: tuple = ()) -> tuple:
+    """Return a generator-B set (its seed from ``name``) and 12 simulated training trials."""
+    out = tmp_path / name
+    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
+                    '--trials-per-family', str(per_family), '--seed', name[1:], '--families',
+                    families, '--jobs', '1'], check=True, capture_output=True)
+    train = tmp_path / 'train'
+    assert simulate_cli.main([str(train), '--trials', '12', '--seed', str(train_seed),
+                              '--conditions', 'wide', *events, '--quiet']) == 0
+    return out, train
+
+
 def test_generator_ablation_leaves_a_group_out_and_pools_a_generators_families(tmp_path):
     # benchmarks/generator_ablation.py, the screen of
     # docs/decisions/2026-12-07-feature-groups-on-the-generators.md
-    out = tmp_path / 'B7'
-    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
-                    '--trials-per-family', '2', '--seed', '7', '--families',
-                    'hsr_side,tiago_mobile', '--jobs', '1'], check=True, capture_output=True)
-    train = tmp_path / 'train'
-    assert simulate_cli.main([str(train), '--trials', '12', '--seed', '5', '--conditions',
-                              'wide', '--quiet']) == 0
+    out, train = _ablation_inputs(tmp_path, name='B7', per_family=2,
+                                  families='hsr_side,tiago_mobile', train_seed=5)
     counts = tmp_path / 'ablation.json'
     done = subprocess.run([sys.executable, BENCHMARKS / 'generator_ablation.py', out,
                            '--train', train, '--drop', 'torque', '--union', 'torque+audio_abs',
@@ -180,13 +188,9 @@ def test_generator_ablation_decides_recordings_without_a_microphone_for_the_ft_o
         tmp_path):
     # the F/T-only recipe's frames are clocked by the F/T stream, as the shipped F/T-only
     # model's: heavy_slow has no microphone and must be decided, not left without frames
-    out = tmp_path / 'B8'
-    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
-                    '--trials-per-family', '3', '--seed', '8', '--families',
-                    'heavy_slow,ur5e_guarded', '--jobs', '1'], check=True, capture_output=True)
-    train = tmp_path / 'train'
-    assert simulate_cli.main([str(train), '--trials', '12', '--seed', '6', '--conditions',
-                              'wide', '--events', 'everywhere', '--quiet']) == 0
+    out, train = _ablation_inputs(tmp_path, name='B8', per_family=3,
+                                  families='heavy_slow,ur5e_guarded', train_seed=6,
+                                  events=('--events', 'everywhere'))
     counts = tmp_path / 'ablation.json'
     subprocess.run([sys.executable, BENCHMARKS / 'generator_ablation.py', out, '--train', train,
                     '--recipe', 'ft-only', '--drop', 'torque', '--seeds', '0', '--jobs', '1',
