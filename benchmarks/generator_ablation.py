@@ -49,7 +49,7 @@ from contact_detector.training.recipe import recipe_defaults
 from contact_detector.training.sweep import fit_forest, score_rules
 from generator_rules import set_frames
 from lofo_frames import load_frames
-from lofo_rules import candidate_columns, GROUPS, recipe_rules, RECIPES
+from lofo_rules import add_run_arguments, candidate_columns, GROUPS, recipe_rules, RECIPES
 
 
 def pooled(frames: list, *, generator: str) -> list:
@@ -85,10 +85,7 @@ def main(argv=None) -> int:
                              'features in turn)')
     parser.add_argument('--union', action='append', default=[],
                         help='groups left out together, joined by +')
-    parser.add_argument('--seeds', default='0,1,2')
-    parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--families', action='store_true', help='one line per family too')
-    parser.add_argument('--json', type=Path, default=None, help='the counts, as JSON')
+    add_run_arguments(parser)
     parser.add_argument('--cache', type=Path, default=None,
                         help='a pickle of the training frames, reused when it matches')
     args = parser.parse_args(argv)

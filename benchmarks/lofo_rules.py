@@ -139,6 +139,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--recipe', choices=sorted(RECIPES), default='ft-only')
     parser.add_argument('--rule', action='append', default=[],
                         help='NAME:FIELD=VALUE[,...], the shipped rule with those fields')
+    add_run_arguments(parser)
+
+
+def add_run_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the forests' seeds, the jobs and the output options the screens share."""
     parser.add_argument('--seeds', default='0,1,2')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--families', action='store_true', help='one line per family too')

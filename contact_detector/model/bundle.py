@@ -239,9 +239,9 @@ class ModelBundle:
         Extremely randomized trees (``training['splitter']`` ``'random'``, ``train --splitter
         random``) are ``et<trees>``.
         """
-        paper = self.feature_config.feature_names[:-len(self.feature_config.extra_features)
-                                                  or None]
-        base = f'ft{len(paper)}' if self.feature_config.ft_only else f'paper{len(paper)}'
+        config = self.feature_config
+        paper = len(config.feature_names) - len(config.extra_features)
+        base = f'ft{paper}' if config.ft_only else f'paper{paper}'
         feature_set = '+'.join((base,) + tuple(self.feature_config.extra_features))
         kind = 'et' if self.training.get('splitter') == 'random' else 'rf'
         return f'{kind}{self.n_estimators}-{feature_set}-{self.forest_sha256[:10]}'
