@@ -16,7 +16,7 @@
 """
 Turn the real HIRO snap-assembly recordings into labelled rosbag2 bags.
 
-    tools/hiro_to_bags.py SRC OUT [--quiet-audio] [--storage sqlite3|mcap]
+    tools/hiro_to_bags.py SRC OUT [--quiet-audio] [--storage sqlite3|mcap] [--torque-scale S]
 
 ``SRC`` is a clone of https://github.com/HongminWu/HIRO_SA_DATA (docs/your-robot.md says how
 to fetch it). A real HIRO arm holds a plastic part with snap clips, lowers it slowly onto its
@@ -41,6 +41,11 @@ itself if ``d`` is inside the band there). A trial without a contact phase is no
 ``--quiet-audio`` adds a microphone that hears nothing of the contact: 16 kHz
 ``std_msgs/msg/Int16MultiArray`` chunks of 1024 samples of white noise with a standard
 deviation of 3 LSB (about -80 dBFS), so the multimodal model decides.
+
+``--torque-scale S`` multiplies every torque by ``S`` (default 1): the forces as recorded, with
+the torques of a contact ``S`` times farther off the sensor's axis. The part is pressed close to
+that axis, so its torque barely moves; this asks whether that is what a model misses
+(docs/decisions/2026-12-07-ft-only-label-start.md).
 """
 
 import argparse
@@ -143,7 +148,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--quiet-audio', action='store_true',
                         help='add a microphone track that hears nothing of the contact')
     parser.add_argument('--storage', choices=sorted(STORAGES), default='sqlite3')
+    parser.add_argument('--torque-scale', type=float, default=1.0, metavar='S',
+                        help='multiply every torque by S > 0 (default 1: as recorded)')
     args = parser.parse_args(argv)
+    if not (np.isfinite(args.torque_scale) and args.torque_scale > 0):
+        parser.error(f'--torque-scale must be a finite number > 0, got {args.torque_scale}')
     trials = [(d, family) for group, family in GROUPS.items() if (args.src / group).is_dir()
               for d in sorted((args.src / group).iterdir()) if (d / 'R_Torques.dat').is_file()]
     if not trials:
@@ -171,7 +180,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                   f'values, got {table.shape[1]} columns and {len(table)} rows', file=sys.stderr)
             unreadable.append(folder.name)
             continue
-        t, wrench = table[:, 0], table[:, 1:7]
+        t, wrench = table[:, 0], table[:, 1:7] * ([1.0] * 3 + [args.torque_scale] * 3)
         try:
             onset = contact_onset(t=t, force=wrench[:, :3], detected_s=detected_s)
         except ValueError as err:

@@ -401,3 +401,30 @@ def test_the_hiro_recordings_become_labelled_bags_evaluate_decides(tmp_path, qui
     again = subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src, out],
                            capture_output=True, text=True)
     assert again.returncode == 1 and 'exists; give an empty OUT' in again.stderr
+
+
+def test_hiro_to_bags_scales_the_torque_and_refuses_a_scale_that_is_no_size(tmp_path):
+    # --torque-scale: the recorded forces with the torques of a contact S times farther off
+    # the sensor's axis (docs/decisions/2026-12-07-ft-only-label-start.md)
+    src = tmp_path / 'HIRO_SA_DATA'
+    _hiro_trial(src / 'REAL_HIRO_ONE_SA_SUCCESS' / 'S-01', states='0.0\n3.5\n')
+    table = np.loadtxt(src / 'REAL_HIRO_ONE_SA_SUCCESS' / 'S-01' / 'R_Torques.dat')
+    series = {}
+    for scale in ('1', '10'):
+        out = tmp_path / f'bags{scale}'
+        subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src, out,
+                        '--torque-scale', scale], capture_output=True, text=True, check=True)
+        series[scale] = read_wrench(out / 'success' / 'S-01')
+        # the onset is found on the force, which the scale leaves alone
+        assert (out / 'labels.csv').read_text() == (
+            tmp_path / 'bags1' / 'labels.csv').read_text().replace('bags1', f'bags{scale}')
+    np.testing.assert_allclose(series['1'].torque, table[:, 4:7], atol=1e-9)
+    np.testing.assert_allclose(series['10'].torque, 10 * table[:, 4:7], atol=1e-8)
+    np.testing.assert_array_equal(series['10'].force, series['1'].force)
+    for bad in ('0', '-2', 'nan'):
+        refused = subprocess.run([sys.executable, ROOT / 'tools' / 'hiro_to_bags.py', src,
+                                  tmp_path / f'no{bad}', '--torque-scale', bad],
+                                 capture_output=True, text=True)
+        assert refused.returncode == 2
+        assert '--torque-scale must be a finite number > 0' in refused.stderr
+        assert not (tmp_path / f'no{bad}').exists()
