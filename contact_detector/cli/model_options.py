@@ -96,6 +96,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--label-ignore', type=float, default=m.labels.ignore_s,
                         metavar='S', help='leave the frames up to S s after the label window '
                         'out of training (default %(default)s: labelled no contact)')
+    parser.add_argument('--label-ignore-lead', action='store_true',
+                        help='leave the frames from the onset to --label-start out of training '
+                             '(default: labelled no contact)')
     parser.add_argument('--event-weight', type=float, default=None, metavar='W',
                         help='training weight of the no-contact frames from 20 ms before to '
                              '0.8 s after a simulated knock, touch, brush or set-down starts '
@@ -239,7 +242,8 @@ def labels_from_args(args: argparse.Namespace) -> LabelWindow:
     return LabelWindow(start_s=_given(args.label_start, default=d.start_s),
                        end_s=_given(args.label_end, default=d.end_s),
                        ignore_s=args.label_ignore,
-                       event_weight=_given(args.event_weight, default=d.event_weight))
+                       event_weight=_given(args.event_weight, default=d.event_weight),
+                       ignore_lead=args.label_ignore_lead)
 
 
 def add_augmentation_arguments(parser: argparse.ArgumentParser, *,

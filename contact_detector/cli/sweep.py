@@ -158,6 +158,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--lofo-label-ignore', type=float, default=0.0, metavar='S',
                         help='--lofo: leave the frames up to S s after the label window out '
                              'of training (default 0: they are labelled no contact)')
+    parser.add_argument('--lofo-label-ignore-lead', action='store_true',
+                        help='--lofo: leave the frames from the onset to --lofo-label-start out '
+                             'of training (default: they are labelled no contact)')
     parser.add_argument('--lofo-event-weight', type=float, default=1.0, metavar='W',
                         help='--lofo: weight of the no-contact frames from 20 ms before to '
                              '0.8 s after a simulated knock, touch, brush or set-down starts '
@@ -224,7 +227,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             augmentation = augmentation_from_args(args, defaults=STUDY_AUGMENTATION)
             check_min_samples_leaf(args.min_samples_leaf)
             label = LabelWindow(args.lofo_label_start, args.lofo_label_end,
-                                args.lofo_label_ignore, args.lofo_event_weight)
+                                args.lofo_label_ignore, args.lofo_event_weight,
+                                args.lofo_label_ignore_lead)
             found, audio_rate, wrench_rate = discover(folder_bags(args.bags), args)
         except ContactDetectorError as err:
             parser.error(str(err))

@@ -57,7 +57,10 @@ class LabelWindow:
     the contact *state* after the onset. Frames ending in ``[onset + end_s, onset + end_s +
     ignore_s)`` are left out of training (``ignore_s`` > 0): the object resting on the table
     after the window is then not taught as *no contact*, so a forest that misses the first
-    frames of a contact is not trained to call the rest of it no contact either.
+    frames of a contact is not trained to call the rest of it no contact either. With
+    ``ignore_lead`` the frames ending in ``[onset, onset + start_s)`` are left out too, instead
+    of being taught *no contact*: with F/T alone the first instants of a contact look like a
+    knock's, and leaving them out teaches the forest neither answer for them.
 
     ``event_weight`` is how much a *no contact* frame near an exogenous event (a knock, a
     touch, a brush, a set-down: the simulator's ``impacts``) weighs in training, against 1
@@ -73,9 +76,18 @@ class LabelWindow:
     end_s: float = 0.1
     ignore_s: float = 0.0
     event_weight: float = 1.0
+    ignore_lead: bool = False
 
     def __post_init__(self) -> None:
-        """Refuse a negative ``ignore_s`` or an ``event_weight`` below 1 (:class:`ConfigError`)."""
+        """
+        Refuse a bad field (:class:`ConfigError`).
+
+        A negative ``ignore_s``, an ``event_weight`` below 1, or an ``ignore_lead`` that is not
+        a bool.
+        """
+        if not isinstance(self.ignore_lead, (bool, np.bool_)):
+            raise ConfigError(f'LabelWindow.ignore_lead must be true or false, got '
+                              f'{self.ignore_lead!r}')
         for name, low in (('ignore_s', 0.0), ('event_weight', 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
@@ -84,12 +96,14 @@ class LabelWindow:
                                   f'got {value!r}')
 
     def to_dict(self) -> dict:
-        """Plain-JSON form, stored in the model bundle (the last two only when not default)."""
+        """Plain-JSON form, stored in the model bundle (the last three only when not default)."""
         out = {'start_s': self.start_s, 'end_s': self.end_s}
         if self.ignore_s > 0:
             out['ignore_s'] = self.ignore_s
         if self.event_weight != 1.0:
             out['event_weight'] = self.event_weight
+        if self.ignore_lead:
+            out['ignore_lead'] = True
         return out
 
     def weights(self, *, t: np.ndarray, onsets: Sequence[float],
@@ -128,7 +142,7 @@ class LabelWindow:
 
     def trained(self, *, t: np.ndarray, onsets: Sequence[float]) -> np.ndarray:
         """
-        Return which frames a forest is trained on: all but those ``ignore_s`` after the window.
+        Return which frames a forest is trained on: all but the ignored ones.
 
         Parameters
         ----------
@@ -140,12 +154,16 @@ class LabelWindow:
         Returns
         -------
         np.ndarray, shape (n,), bool
-            False for frames ending in ``[onset + end_s, onset + end_s + ignore_s)``.
+            False for frames ending in ``[onset + end_s, onset + end_s + ignore_s)`` and,
+            with ``ignore_lead``, in ``[onset, onset + start_s)``.
 
         """
-        # the frames left out are a label window of their own, right after this one
-        return frame_labels(t=t, onsets=onsets, start_s=self.end_s,
+        # the frames left out are label windows of their own, right after and before this one
+        kept = frame_labels(t=t, onsets=onsets, start_s=self.end_s,
                             end_s=self.end_s + self.ignore_s) == 0
+        if self.ignore_lead and self.start_s > 0:
+            kept &= frame_labels(t=t, onsets=onsets, start_s=0.0, end_s=self.start_s) == 0
+        return kept
 
 
 @dataclass

@@ -335,6 +335,28 @@ def test_train_leaves_the_frames_after_the_label_window_out_with_label_ignore(tm
                            str(tmp_path / 'bad.npz')]) == 1
 
 
+def test_train_leaves_the_first_frames_of_each_contact_out_with_label_ignore_lead(tmp_path):
+    bags = tmp_path / 'trials'
+    assert simulate_cli.main([str(bags), '--trials', '6', '--seed', '31', '--conditions',
+                              'paper', '--quiet']) == 0
+    cards = {}
+    for name, extra in (('taught', []), ('left_out', ['--label-ignore-lead'])):
+        model = tmp_path / f'{name}.npz'
+        assert train_cli.main([str(bags), '--no-audio', '--trees', '2', '--jobs', '1',
+                               '--no-events', '--out', str(model), *extra]) == 0
+        cards[name] = load_bundle(path=model)
+    # the F/T-only recipe labels contact from 30 ms after the onset
+    assert cards['taught'].label_window == {'start_s': 0.03, 'end_s': 0.3}
+    assert cards['left_out'].label_window == {'start_s': 0.03, 'end_s': 0.3,
+                                              'ignore_lead': True}
+    # 30 ms of 10 ms F/T frames after each of the 6 onsets are not trained on; the contact
+    # frames are the same
+    dropped = cards['taught'].training['frames'] - cards['left_out'].training['frames']
+    assert 6 * 2 <= dropped <= 6 * 4
+    assert cards['taught'].training['contact_frames'] == cards['left_out'].training[
+        'contact_frames']
+
+
 def test_train_weighs_the_frames_of_simulated_events_with_event_weight(tmp_path):
     bags, models = _models_per_value(tmp_path=tmp_path, seed='31', conditions='exogenous',
                                      trees='3', option='--event-weight', values=('1', '5'))

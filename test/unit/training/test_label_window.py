@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Which frames a forest is trained on: the label window and the frames left out after it."""
+"""Which frames a forest is trained on: the label window and the frames left out around it."""
 
 from contact_detector.errors import ConfigError
 from contact_detector.training.protocol import LabelWindow, stack_weights
@@ -28,6 +28,33 @@ def test_frames_after_the_window_are_left_out_of_training_only_for_ignore_s():
     # 0.3-0.5 s after each onset: the object rests on the table, neither label is taught
     assert dropped.tolist() == (np.r_[130:150, 280:300] / 100.0).tolist()
     assert LabelWindow(start_s=0.0, end_s=0.3).trained(t=t, onsets=[1.0]).all()
+
+
+def test_with_ignore_lead_the_frames_before_the_window_are_left_out_not_taught_no_contact():
+    t = np.arange(400) / 100.0
+    window = LabelWindow(start_s=0.03, end_s=0.3, ignore_lead=True)
+    kept = window.trained(t=t, onsets=[1.0, 2.5])
+    # the first 30 ms of each contact: 3 frames of 10 ms, neither label is taught
+    assert t[~kept].tolist() == (np.r_[100:103, 250:253] / 100.0).tolist()
+    # without it they are trained on, as no contact
+    assert LabelWindow(start_s=0.03, end_s=0.3).trained(t=t, onsets=[1.0, 2.5]).all()
+    # a window from the onset has nothing before it to leave out
+    assert LabelWindow(start_s=0.0, end_s=0.3, ignore_lead=True).trained(t=t, onsets=[1.0]).all()
+    both = LabelWindow(start_s=0.03, end_s=0.3, ignore_s=0.2, ignore_lead=True)
+    assert (~both.trained(t=t, onsets=[1.0])).sum() == 3 + 20
+
+
+def test_ignore_lead_is_in_the_model_file_only_when_set():
+    window = LabelWindow(start_s=0.03, end_s=0.3, ignore_lead=True)
+    assert window.to_dict() == {'start_s': 0.03, 'end_s': 0.3, 'ignore_lead': True}
+    assert LabelWindow(**window.to_dict()) == window
+    assert 'ignore_lead' not in LabelWindow(start_s=0.03, end_s=0.3).to_dict()
+
+
+@pytest.mark.parametrize('bad', [1, 'yes', None])
+def test_an_ignore_lead_that_is_not_a_bool_is_refused(bad):
+    with pytest.raises(ConfigError, match='ignore_lead'):
+        LabelWindow(start_s=0.03, end_s=0.3, ignore_lead=bad)
 
 
 def test_model_files_without_ignore_s_keep_their_label_window():
