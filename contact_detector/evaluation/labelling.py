@@ -26,7 +26,13 @@ which must decide causally, this sees the whole recording and works in three ste
    length of the vector change, so the sensor's orientation and tare do not matter. Runs with
    ``E > level`` lasting at least ``min_lasting_s`` are candidates; the one with the largest
    area ``sum E dt`` is the contact (a touch or a brush is shorter and smaller; the retreat
-   returns to ``w_ref`` and is the end of the same run).
+   returns to ``w_ref`` and is the end of the same run). A run that starts less than
+   ``pre_s`` plus half of ``smooth_s`` after the recording's first sample is no candidate: a
+   bag begun during a lift or a grasp has no rest to measure that change from, and its onset
+   would be the first sample. For the same reason
+   ``peak`` is the largest ``E`` after the first sample within ``max(4 s_E, 1)`` of ``E``'s
+   median (``s_E`` its MAD-based spread). If every run is such a change, or ``E`` never
+   comes to rest, no onset is proposed (``NO_REST``).
 2. **Where the F/T leaves its baseline.** Walking back from the run's start to where ``E``
    falls to its floor gives the pre-event baseline ``b``: the median of ``w`` over ``pre_s``
    before that point. With ``u`` the unit direction of the change, ``y_j = (w_j - b) . u`` is
@@ -129,8 +135,9 @@ which must decide causally, this sees the whole recording and works in three ste
    sound).
 
 The confidence in [0, 1] multiplies the step's size in noise units (``min(1, E / 20)``),
-how clearly it is the largest (``1 - area_2 / area_1``) and, with audio, 1 if a sound was
-found near the F/T onset, else 0.8.
+how clearly it is the largest (``1 - area_2 / area_1``, ``area_2`` the largest other run's,
+one without rest before it included; 0 if that one is larger) and, with audio, 1 if a sound
+was found near the F/T onset, else 0.8.
 """
 
 import dataclasses
@@ -143,6 +150,7 @@ import numpy as np
 
 #: Reasons a recording gets no onset.
 NO_CHANGE = 'no lasting load change'
+NO_REST = 'every lasting load change is under way when the recording starts: no rest before it'
 TOO_SHORT = 'recording shorter than 1 s of F/T'
 
 
@@ -371,6 +379,14 @@ def noise_sigma(x: np.ndarray) -> float:
     mad = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0)
     s = np.where(mad > 0, mad, np.std(d, axis=0)) / math.sqrt(2.0)
     return max(float(np.sqrt(np.mean(s ** 2))), 1e-9)
+
+
+def _left_floor(*, shift: np.ndarray, a: int, floor: float) -> int:
+    """Return the first sample of the climb out of ``floor`` that reaches the run at ``a``."""
+    i = a
+    while i > 0 and shift[i - 1] > floor:
+        i -= 1
+    return i
 
 
 def _robust_sd(x: np.ndarray) -> float:
@@ -682,24 +698,38 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     smooth = _running_median(w, int(round(s.smooth_s / dt)) | 1)
     ref = np.median(w, axis=0)
     shift = np.linalg.norm(smooth - ref, axis=1)
-    peak = float(shift.max())
+    # the shift's floor: the recording's typical shift
+    floor = float(np.median(shift))
+    spread = 1.4826 * float(np.median(np.abs(shift - floor)))
+    # a bag begun during a lift or a grasp starts with a change under way: the level that
+    # makes a run is set by the peak after the load first came to rest, so that such a change
+    # does not hide the contact under a level of its own size
+    at_rest = np.nonzero(shift <= floor + max(4.0 * spread, 1.0))[0]
+    if not len(at_rest):
+        return Proposal(None, 0.0, reason=NO_REST, shift_t=t, shift=shift)
+    peak = float(shift[int(at_rest[0]):].max())
     level = max(s.min_shift, s.level_frac * peak)
     runs = [(a, b) for a, b in _runs(shift > level) if (b - a) * dt >= s.min_lasting_s]
     if not runs:
         return Proposal(None, 0.0, reason=NO_CHANGE, shift_t=t, shift=shift)
     areas = [float(shift[a:b].sum() * dt) for a, b in runs]
-    order = np.argsort(areas)[::-1]
-    a, b = runs[int(order[0])]
-    clarity = 1.0 - (areas[int(order[1])] / areas[int(order[0])] if len(runs) > 1 else 0.0)
-    # back to where the shift left its floor (the recording's typical shift)
-    floor = float(np.median(shift))
-    spread = 1.4826 * float(np.median(np.abs(shift - floor)))
+    order = [int(k) for k in np.argsort(areas)[::-1]]
+    # back to where the shift left its floor
     floor_lvl = floor + min(max(4.0 * spread, 1.0), 0.1 * (level - floor))
-    i = a
-    while i > 0 and shift[i - 1] > floor_lvl:
-        i -= 1
     n_pre = max(3, int(round(s.pre_s / dt)))
-    j1 = max(1, i - int(round(0.5 * s.smooth_s / dt)))
+    half = int(round(0.5 * s.smooth_s / dt))
+    # a change already under way when the recording starts (a bag begun during a lift or a
+    # grasp) has no rest before it to measure from: its "onset" would be the first sample
+    rested = [k for k in order if runs[k][0] >= half + n_pre]
+    if not rested:
+        return Proposal(None, 0.0, reason=NO_REST, shift_t=t, shift=shift)
+    chosen = rested[0]
+    a, b = runs[chosen]
+    # how clearly it is the largest: a larger change without rest before it counts against it
+    other = max((areas[k] for k in order if k != chosen), default=0.0)
+    clarity = max(0.0, 1.0 - other / areas[chosen])
+    i = _left_floor(shift=shift, a=a, floor=floor_lvl)
+    j1 = max(1, i - half)
     j0 = max(0, j1 - n_pre)
     base = np.median(w[j0:j1], axis=0)
     change = np.median(w[a:min(b, a + int(round(s.smooth_s / dt)) + 1)], axis=0) - base

@@ -26,7 +26,8 @@ axis. The load acts along -z with a lever arm, so force and torque change togeth
 is white noise at 16 kHz with, where a test adds one, a faint click (a decaying noise burst).
 """
 
-from contact_detector.evaluation.labelling import (cusum_start, propose_onset, rise_fits_start,
+from contact_detector.evaluation.labelling import (cusum_start, NO_REST, propose_onset,
+                                                   rise_fits_start,
                                                    whitened_direction)
 import numpy as np
 import pytest
@@ -371,3 +372,30 @@ def test_rise_fits_start_rejects_a_start_too_early_for_the_growth():
                            margin=2.0)
     assert not rise_fits_start(t=t, y=y, sd=1.0, m=m, end=m + 10, start=0.4, power=2.0,
                                margin=2.0)
+
+
+def _begun_during_a_lift(force: np.ndarray, torque: np.ndarray, t: np.ndarray) -> None:
+    """Add a 60 N load (lift inertia, a grasp settling) fading out over the first second."""
+    fade = np.clip(1.0 - t, 0.0, None)
+    force[:, 2] -= 60.0 * fade
+    torque[:, 0] -= 3.0 * fade
+
+
+@pytest.mark.parametrize('seed', [5, 6])
+def test_a_larger_change_under_way_at_the_start_is_not_the_contact(seed):
+    # a bag begun during a lift: the first second moves the load more than the contact does,
+    # and there is nothing before it to measure from, so its onset would be the first sample
+    t, force, torque = _wrench(_soft, seed=seed)
+    _begun_during_a_lift(force, torque, t)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert abs(p.onset_t - ONSET) <= 0.020, (p.onset_t - ONSET) * 1e3
+    # the larger change counts against the proposal: look at it before using it
+    assert p.confidence == 0.0
+
+
+def test_a_recording_whose_only_change_has_no_rest_before_it_gets_no_onset():
+    t, force, torque = _wrench(lambda tau: 0.0 * tau, seed=5)
+    _begun_during_a_lift(force, torque, t)
+    p = propose_onset(ft_t=t, force=force, torque=torque)
+    assert p.onset_t is None and p.confidence == 0.0
+    assert p.reason == NO_REST
