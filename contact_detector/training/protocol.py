@@ -82,12 +82,16 @@ class LabelWindow:
         """
         Refuse a bad field (:class:`ConfigError`).
 
-        A negative ``ignore_s``, an ``event_weight`` below 1, or an ``ignore_lead`` that is not
-        a bool.
+        A negative ``ignore_s``, an ``event_weight`` below 1, an ``ignore_lead`` that is not a
+        bool, or one that is set with nothing before the window (``start_s <= 0``).
         """
         if not isinstance(self.ignore_lead, (bool, np.bool_)):
             raise ConfigError(f'LabelWindow.ignore_lead must be true or false, got '
                               f'{self.ignore_lead!r}')
+        if self.ignore_lead and not self.start_s > 0:
+            raise ConfigError(f'LabelWindow.ignore_lead leaves out the frames from the onset to '
+                              f'start_s, and start_s is {self.start_s!r}: give a label start '
+                              f'> 0')
         for name, low in (('ignore_s', 0.0), ('event_weight', 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
@@ -161,7 +165,7 @@ class LabelWindow:
         # the frames left out are label windows of their own, right after and before this one
         kept = frame_labels(t=t, onsets=onsets, start_s=self.end_s,
                             end_s=self.end_s + self.ignore_s) == 0
-        if self.ignore_lead and self.start_s > 0:
+        if self.ignore_lead:
             kept &= frame_labels(t=t, onsets=onsets, start_s=0.0, end_s=self.start_s) == 0
         return kept
 

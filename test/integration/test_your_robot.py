@@ -355,6 +355,10 @@ def test_train_leaves_the_first_frames_of_each_contact_out_with_label_ignore_lea
     assert 6 * 2 <= dropped <= 6 * 4
     assert cards['taught'].training['contact_frames'] == cards['left_out'].training[
         'contact_frames']
+    # the multimodal recipe labels from the onset: nothing to leave out, a clear refusal
+    assert train_cli.main([str(bags), '--label-ignore-lead', '--out',
+                           str(tmp_path / 'bad.npz')]) == 1
+    assert not (tmp_path / 'bad.npz').exists()
 
 
 def test_train_weighs_the_frames_of_simulated_events_with_event_weight(tmp_path):

@@ -38,8 +38,6 @@ def test_with_ignore_lead_the_frames_before_the_window_are_left_out_not_taught_n
     assert t[~kept].tolist() == (np.r_[100:103, 250:253] / 100.0).tolist()
     # without it they are trained on, as no contact
     assert LabelWindow(start_s=0.03, end_s=0.3).trained(t=t, onsets=[1.0, 2.5]).all()
-    # a window from the onset has nothing before it to leave out
-    assert LabelWindow(start_s=0.0, end_s=0.3, ignore_lead=True).trained(t=t, onsets=[1.0]).all()
     both = LabelWindow(start_s=0.03, end_s=0.3, ignore_s=0.2, ignore_lead=True)
     assert (~both.trained(t=t, onsets=[1.0])).sum() == 3 + 20
 
@@ -55,6 +53,11 @@ def test_ignore_lead_is_in_the_model_file_only_when_set():
 def test_an_ignore_lead_that_is_not_a_bool_is_refused(bad):
     with pytest.raises(ConfigError, match='ignore_lead'):
         LabelWindow(start_s=0.03, end_s=0.3, ignore_lead=bad)
+
+
+def test_ignore_lead_with_a_window_from_the_onset_is_refused_not_a_silent_no_op():
+    with pytest.raises(ConfigError, match='give a label start > 0'):
+        LabelWindow(start_s=0.0, end_s=0.3, ignore_lead=True)
 
 
 def test_model_files_without_ignore_s_keep_their_label_window():
