@@ -47,7 +47,7 @@ from contact_detector.evaluation.metrics import summarize_by_condition
 from contact_detector.features.config import AUDIO_FEATURES
 from contact_detector.training.recipe import recipe_defaults
 from contact_detector.training.sweep import fit_forest, score_rules
-from generator_rules import set_frames
+from generator_rules import set_frames, sets_parser
 from lofo_frames import load_frames
 from lofo_rules import add_run_arguments, candidate_columns, GROUPS, recipe_rules, RECIPES
 
@@ -73,10 +73,7 @@ def family_scores(outcomes: list) -> Dict[str, dict]:
 
 def main(argv=None) -> int:
     """Run the screen; return the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('sets', nargs='+', type=Path,
-                        help='folders of labelled recordings (labels.csv, family sub-folders)')
+    parser = sets_parser(__doc__)
     parser.add_argument('--train', nargs='+', type=Path, required=True,
                         help="the recipe's simulated training folders")
     parser.add_argument('--recipe', choices=sorted(RECIPES), default='multimodal')

@@ -138,12 +138,18 @@ def early_lines(*, outcomes: list, frames: list) -> List[str]:
     return lines
 
 
-def main(argv=None) -> int:
-    """Run the comparison; return the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__,
+def sets_parser(description: str) -> argparse.ArgumentParser:
+    """Return a screen's parser with its ``sets``: folders of labelled recordings."""
+    parser = argparse.ArgumentParser(description=description,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('sets', nargs='+', type=Path,
                         help='folders of labelled recordings (labels.csv, family sub-folders)')
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the comparison; return the exit status."""
+    parser = sets_parser(__doc__)
     parser.add_argument('--model', type=Path, default=None,
                         help="the model whose forest decides (default: the recipe's shipped "
                              'model)')

@@ -381,14 +381,6 @@ def noise_sigma(x: np.ndarray) -> float:
     return max(float(np.sqrt(np.mean(s ** 2))), 1e-9)
 
 
-def _left_floor(*, shift: np.ndarray, a: int, floor: float) -> int:
-    """Return the first sample of the climb out of ``floor`` that reaches the run at ``a``."""
-    i = a
-    while i > 0 and shift[i - 1] > floor:
-        i -= 1
-    return i
-
-
 def _robust_sd(x: np.ndarray) -> float:
     """MAD-based standard deviation of ``x`` (at least 1e-9)."""
     return max(1.4826 * float(np.median(np.abs(x - np.median(x)))), 1e-9)
@@ -701,10 +693,11 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # the shift's floor: the recording's typical shift
     floor = float(np.median(shift))
     spread = 1.4826 * float(np.median(np.abs(shift - floor)))
+    rest_band = max(4.0 * spread, 1.0)
     # a bag begun during a lift or a grasp starts with a change under way: the level that
     # makes a run is set by the peak after the load first came to rest, so that such a change
     # does not hide the contact under a level of its own size
-    at_rest = np.nonzero(shift <= floor + max(4.0 * spread, 1.0))[0]
+    at_rest = np.nonzero(shift <= floor + rest_band)[0]
     if not len(at_rest):
         return Proposal(None, 0.0, reason=NO_REST, shift_t=t, shift=shift)
     peak = float(shift[int(at_rest[0]):].max())
@@ -715,7 +708,7 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     areas = [float(shift[a:b].sum() * dt) for a, b in runs]
     order = [int(k) for k in np.argsort(areas)[::-1]]
     # back to where the shift left its floor
-    floor_lvl = floor + min(max(4.0 * spread, 1.0), 0.1 * (level - floor))
+    floor_lvl = floor + min(rest_band, 0.1 * (level - floor))
     n_pre = max(3, int(round(s.pre_s / dt)))
     half = int(round(0.5 * s.smooth_s / dt))
     # a change already under way when the recording starts (a bag begun during a lift or a
@@ -728,7 +721,9 @@ def propose_onset(*, ft_t: np.ndarray, force: np.ndarray, torque: np.ndarray,
     # how clearly it is the largest: a larger change without rest before it counts against it
     other = max((areas[k] for k in order if k != chosen), default=0.0)
     clarity = max(0.0, 1.0 - other / areas[chosen])
-    i = _left_floor(shift=shift, a=a, floor=floor_lvl)
+    i = a
+    while i > 0 and shift[i - 1] > floor_lvl:
+        i -= 1
     j1 = max(1, i - half)
     j0 = max(0, j1 - n_pre)
     base = np.median(w[j0:j1], axis=0)
