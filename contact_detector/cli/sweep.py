@@ -141,6 +141,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='--lofo: leave out only these families, comma-separated (e.g. '
                              'exogenous,heavy), each forest still trained on all the others: '
                              'a cheap screen; a conclusion needs every family (the default)')
+    parser.add_argument('--lofo-train-only', action='append', default=[], metavar='DIR',
+                        help='--lofo: every fold also trains on the trials of DIR (except '
+                             'those of the family left out) and none of them is scored: a '
+                             'learning curve on the same scored trials (repeatable)')
     parser.add_argument('--trees', type=int, default=10, help='trees per forest')
     parser.add_argument('--min-samples-leaf', type=int, default=1, metavar='N',
                         help='--lofo: fewest training frames in a leaf of every forest '
@@ -222,6 +226,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if args.out:
             args.out.write_text(output)
         return 0
+    if args.lofo_train_only and not args.lofo:
+        parser.error('--lofo-train-only needs --lofo')
+    both = {str(Path(f).resolve()) for f in args.bags} & {
+        str(Path(f).resolve()) for f in args.lofo_train_only}
+    if both:
+        parser.error(f'a folder is both scored and only trained on: {sorted(both)}')
     if args.lofo:
         try:
             augmentation = augmentation_from_args(args, defaults=STUDY_AUGMENTATION)
@@ -229,12 +239,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             label = LabelWindow(args.lofo_label_start, args.lofo_label_end,
                                 args.lofo_label_ignore, args.lofo_event_weight,
                                 args.lofo_label_ignore_lead)
-            found, audio_rate, wrench_rate = discover(folder_bags(args.bags), args)
+            found, audio_rate, wrench_rate = discover(
+                folder_bags(args.bags + args.lofo_train_only), args)
         except ContactDetectorError as err:
             parser.error(str(err))
-        trials = {}
+        trials, train_only = {}, {}
         for i, folder in enumerate(args.bags):
             trials.update(decode(found[folder], f'{i}'))
+        for i, folder in enumerate(args.lofo_train_only):
+            train_only.update(decode(found[folder], f'train-only-{i}'))
         families = ([f.strip() for f in args.lofo_families.split(',') if f.strip()]
                     if args.lofo_families else None)
         try:
@@ -244,6 +257,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 augmentation=augmentation, min_samples_leaf=args.min_samples_leaf,
                 splitter=args.splitter, families=families, audio_rate=audio_rate,
                 wrench_rate=wrench_rate, jobs=args.jobs, load=args.load,
+                train_only=train_only,
                 progress=lambda items: tqdm(items, desc='lofo', unit='setting'))
         except ContactDetectorError as err:
             parser.error(str(err))

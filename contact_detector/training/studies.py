@@ -282,6 +282,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                seeds: Sequence[int] = (), min_samples_leaf: int = 1,
                splitter: str = 'best', families: Optional[Sequence[str]] = None,
                load: Optional[Dict[str, Any]] = None,
+               train_only: Optional[Dict[str, tuple]] = None,
                progress: Callable[[Iterable], Iterable] = iter) -> str:
     """
     Leave-one-family-out over the pooled trials; per setting and rule the worst family.
@@ -305,8 +306,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     ``families`` leaves only those families out in turn (every forest still trains on all the
     others; default: every family, the figure to choose by); a name no trial has raises
     ConfigError. ``load`` (the load paths' :class:`DecisionRule` fields) adds the shipped rule
-    with those load paths, second after the shipped rule (see :func:`load_rules`). Returns
-    markdown.
+    with those load paths, second after the shipped rule (see :func:`load_rules`).
+    ``train_only`` (as ``trials``, keys distinct from its) are trials every fold also trains
+    on, augmented as the others, except those of the family left out, and none is scored: a
+    learning curve on the same scored trials. Returns markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
     check_splitter(splitter)
@@ -315,15 +318,24 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     if unknown:
         raise ConfigError(f'no trials of the families {unknown} (the folders hold '
                           f'{sorted(present)})')
+    shared = sorted(set(trials) & set(train_only or {}))
+    if shared:
+        raise ConfigError(f'trials both scored and only trained on: {shared[:3]}')
     cache: Dict[tuple, list] = {}
 
-    def frames_of(config: FeatureConfig, augmented: bool) -> list:
-        if (config, augmented) not in cache:
-            cache[config, augmented] = list(compute_frames(
-                events_by_trial=trials, config=config, audio_rate=audio_rate,
-                wrench_rate=wrench_rate, jobs=jobs,
+    def frames_of(config: FeatureConfig, augmented: bool, scored: bool = True) -> list:
+        if (config, augmented, scored) not in cache:
+            cache[config, augmented, scored] = list(compute_frames(
+                events_by_trial=trials if scored else train_only, config=config,
+                audio_rate=audio_rate, wrench_rate=wrench_rate, jobs=jobs,
                 augmentation=augmentation if augmented else None, seed=seed).values())
-        return cache[config, augmented]
+        return cache[config, augmented, scored]
+
+    def fit_frames(config: FeatureConfig, augmented: bool) -> Optional[list]:
+        if not augmented and not train_only:
+            return None
+        return (frames_of(config, augmented)
+                + (frames_of(config, augmented, scored=False) if train_only else []))
 
     rules = lofo_rules()
     rules[1:1] = load_rules(base=DEFAULT_RULE, load=load)
@@ -346,8 +358,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
         for forest_seed in (seeds or (seed,)):
             for fold in leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                              n_estimators=trees, seed=forest_seed, jobs=jobs,
-                                             fit_frames=(frames_of(config, True) if augmented
-                                                         else None),
+                                             fit_frames=fit_frames(config, augmented),
                                              families=families,
                                              min_samples_leaf=min_samples_leaf,
                                              splitter=splitter):
@@ -389,6 +400,9 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     if families:
         forests += (f" Left out: only {', '.join(families)} (a screen; the worst family is "
                     'over these).')
+    if train_only:
+        forests += (f' Every fold also trains on {len(train_only)} trials that are never '
+                    'scored (those of the family left out excepted).')
     return '\n'.join(['## Leave one family out: the worst family per setting and rule', '',
                       forests, '',
                       *worst_lines, '', '## Every family', '', *family_lines, ''])

@@ -1004,6 +1004,40 @@ def test_sweep_lofo_event_weight_changes_the_forests_and_says_so(data, tmp_path,
     assert 'event_weight must be a finite number >= 1' in capsys.readouterr().err
 
 
+def test_sweep_lofo_train_only_trains_every_other_fold_on_them_and_scores_none(data, tmp_path,
+                                                                              capsys):
+    families = sorted({t.condition for t in data['trials'].values()})
+    assert len(families) >= 2
+    left = families[0]
+    # the train-only folder: copies of family `left`'s trials under another folder
+    extra = tmp_path / 'extra'
+    copies = [t for t in data['trials'].values() if t.condition == left]
+    for trial in copies:
+        write_trial_bag(trial=trial, path=extra / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in copies], out_dir=extra)
+    plain, rows_plain = _lofo_shipped(data, tmp_path / 'plain.md', '--trees', '3')
+    more, rows_more = _lofo_shipped(data, tmp_path / 'more.md', '--trees', '3',
+                                    '--lofo-train-only', str(extra))
+    assert 'never' not in plain.split('|')[0]
+    assert (f'Every fold also trains on {len(copies)} trials that are never scored'
+            in more.split('|')[0])
+    # the same trials scored: every row counts its family's trials, no copy among them
+    assert [(r[1], r[2], r[3].split('/')[1]) for r in rows_plain] == \
+        [(r[1], r[2], r[3].split('/')[1]) for r in rows_more]
+    # the family left out never trains on its own copies: its forest and rows are the same
+    assert [r for r in rows_plain if r[2] == left] == [r for r in rows_more if r[2] == left]
+    # every other fold trains on them too: other forests, other rows somewhere
+    assert [r for r in rows_plain if r[2] != left] != [r for r in rows_more if r[2] != left]
+    bags = str(data['bags'])
+    for args, message in (([bags, '--lofo-train-only', str(extra)],
+                           '--lofo-train-only needs --lofo'),
+                          ([bags, '--lofo', '--lofo-train-only', bags],
+                           'a folder is both scored and only trained on')):
+        with pytest.raises(SystemExit):
+            sweep_cli.main(args)
+        assert message in capsys.readouterr().err
+
+
 def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data, tmp_path,
                                                                             capsys):
     bags = str(data['bags'])
