@@ -1004,8 +1004,8 @@ def test_sweep_lofo_event_weight_changes_the_forests_and_says_so(data, tmp_path,
     assert 'event_weight must be a finite number >= 1' in capsys.readouterr().err
 
 
-def test_sweep_lofo_train_only_trains_every_other_fold_on_them_and_scores_none(data, tmp_path,
-                                                                              capsys):
+def test_sweep_lofo_train_only_trains_the_other_folds_on_them_and_scores_none(data, tmp_path,
+                                                                             capsys):
     families = sorted({t.condition for t in data['trials'].values()})
     assert len(families) >= 2
     left = families[0]
