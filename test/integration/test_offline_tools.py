@@ -1005,7 +1005,7 @@ def test_sweep_lofo_event_weight_changes_the_forests_and_says_so(data, tmp_path,
 
 
 def test_sweep_lofo_train_only_trains_the_other_folds_on_them_and_scores_none(data, tmp_path,
-                                                                             capsys):
+                                                                              capsys):
     families = sorted({t.condition for t in data['trials'].values()})
     assert len(families) >= 2
     left = families[0]
