@@ -331,7 +331,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                 augmentation=augmentation if augmented else None, seed=seed).values())
         return cache[config, augmented, scored]
 
-    def fit_frames(config: FeatureConfig, augmented: bool) -> Optional[list]:
+    def training_frames(config: FeatureConfig, augmented: bool) -> Optional[list]:
         if not augmented and not train_only:
             return None
         return (frames_of(config, augmented)
@@ -358,7 +358,7 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
         for forest_seed in (seeds or (seed,)):
             for fold in leave_one_family_out(frames=frames, setting=setting, rules=rules,
                                              n_estimators=trees, seed=forest_seed, jobs=jobs,
-                                             fit_frames=fit_frames(config, augmented),
+                                             fit_frames=training_frames(config, augmented),
                                              families=families,
                                              min_samples_leaf=min_samples_leaf,
                                              splitter=splitter):
