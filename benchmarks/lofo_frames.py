@@ -153,9 +153,14 @@ def rule_from(args: argparse.Namespace) -> DecisionRule:
 
 
 def load_frames(*, folders: Sequence[Path], config: FeatureConfig, cache: Optional[Path],
-                jobs: int, augmentation: Optional[WrenchAugmentation] = None) -> Dict[str, object]:
+                jobs: int, augmentation: Optional[WrenchAugmentation] = None,
+                tag_prefix: str = '') -> Dict[str, object]:
     """
     Return every trial's frames of ``folders`` under ``config``, keyed as ``compute_frames``.
+
+    The keys are ``'<tag_prefix><i>/<bag>'`` for the ``i``-th folder, as ``sweep --lofo``
+    names its trials (``'train-only-'`` for those of ``--lofo-train-only``); the augmentation
+    of a trial is drawn from its key.
 
     The simulator's bags: F/T at 100 Hz, audio at 16 kHz. With ``augmentation`` every trial's
     wrench is varied first, as ``sweep --lofo`` varies its training trials (``seed`` 0).
@@ -171,7 +176,8 @@ def load_frames(*, folders: Sequence[Path], config: FeatureConfig, cache: Option
             return frames
     trials = {}
     for i, folder in enumerate(folders):
-        trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(), tag=f'{i}'))
+        trials.update(decode_bags(bags=find_bags([folder]), spec=StreamSpec(),
+                                  tag=f'{tag_prefix}{i}'))
     frames = compute_frames(events_by_trial=trials, config=config, audio_rate=16000.0,
                             wrench_rate=100.0, jobs=jobs, augmentation=augmentation)
     if cache is not None:

@@ -18,6 +18,7 @@ Variants of a shipped model's decision rule, each family left out, with the knoc
     .venv/bin/python benchmarks/lofo_rules.py DIR... [--recipe ft-only|multimodal]
         [--rule NAME:FIELD=VALUE[,FIELD=VALUE...]]... [--seeds 0,1,2] [--jobs 2]
         [--families] [--json out.json] [--splitter best|random] [--drop GROUP]...
+        [--train-only DIR]...
 
 Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
 setting, labels, wrench augmentation and event weight: ``ft-only`` is
@@ -34,7 +35,9 @@ is in the air (issue #16's safety figure: caught, early, median latency); ``--fa
 one line per family. Every rule is scored with the same forests, so their differences are the
 rule's alone. About 4 minutes per seed on the F/T-only pool of docs/offline.md (360 trials) on
 two cores. ``--drop GROUP`` trains and scores the forests without a feature group of
-:data:`GROUPS` (``benchmarks/generator_ablation.py``).
+:data:`GROUPS` (``benchmarks/generator_ablation.py``). ``--train-only DIR`` adds trials that
+every fold trains on (augmented, except those of the family left out) and none is scored on,
+keyed as ``sweep --lofo-train-only`` keys them, so ``S`` reproduces that sweep's row.
 """
 
 import argparse
@@ -169,17 +172,24 @@ def recipe_rules(args: argparse.Namespace,
     return setting, rules
 
 
-def recipe_frames(args: argparse.Namespace, setting) -> Tuple[Dict[str, object], List]:
+def recipe_frames(args: argparse.Namespace, setting, *,
+                  train_only: Sequence[Path] = ()) -> Tuple[Dict[str, object], List]:
     """
     Return every trial's frames as simulated (keyed) and as the forests train on them.
 
-    The second are the same trials with the recipe's wrench augmentation.
+    The second are the same trials with the recipe's wrench augmentation, and those of the
+    folders ``train_only``, augmented too.
     """
     recipe = recipe_defaults(ft_only=RECIPES[args.recipe][2])
     frames = load_frames(folders=args.folders, config=setting.config, cache=None,
                          jobs=args.jobs)
     fit = list(load_frames(folders=args.folders, config=setting.config, cache=None,
                            jobs=args.jobs, augmentation=recipe.augmentation).values())
+    if train_only:
+        # keyed and augmented as sweep --lofo-train-only, so S's row is the sweep's
+        fit += list(load_frames(folders=train_only, config=setting.config, cache=None,
+                                jobs=args.jobs, augmentation=recipe.augmentation,
+                                tag_prefix='train-only-').values())
     return frames, fit
 
 
@@ -218,13 +228,20 @@ def main(argv=None) -> int:
                              "'random' (extremely randomized trees)")
     parser.add_argument('--drop', action='append', default=[], choices=sorted(GROUPS),
                         help='a feature group the forests leave out (generator_ablation.py)')
+    parser.add_argument('--train-only', action='append', default=[], type=Path,
+                        metavar='DIR',
+                        help='trials every fold also trains on (except those of the family '
+                             'left out) and none is scored on, as sweep --lofo-train-only')
     args = parser.parse_args(argv)
+    both = {f.resolve() for f in args.folders} & {f.resolve() for f in args.train_only}
+    if both:
+        parser.error(f'a folder is both scored and only trained on: {sorted(map(str, both))}')
     setting, rules = recipe_rules(args, parser)
     try:
         setting = replace(setting, columns=candidate_columns(setting.columns, drops=args.drop))
     except ValueError as err:
         parser.error(str(err))
-    frames, fit = recipe_frames(args, setting)
+    frames, fit = recipe_frames(args, setting, train_only=args.train_only)
     keys = list(frames)
     outcomes = {name: [] for name in rules}
     knocked = {name: [] for name in rules}

@@ -1038,6 +1038,50 @@ def test_sweep_lofo_train_only_trains_the_other_folds_on_them_and_scores_none(da
         assert message in capsys.readouterr().err
 
 
+def test_lofo_rules_train_only_reproduces_the_sweeps_row(data, tmp_path):
+    # benchmarks/lofo_rules.py --train-only, the command behind the F/T-only learning curve:
+    # its shipped rule S is the sweep's shipped rule with the load paths, on the same forests
+    extra = tmp_path / 'extra'
+    more = list(simulate_trials(n=6, seed=SEED + 1, conditions=['all']))
+    for trial in more:
+        write_trial_bag(trial=trial, path=extra / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in more], out_dir=extra)
+    out = tmp_path / 'lofo.md'
+    assert sweep_cli.main([str(data['bags']), '--lofo', '--lofo-train-only', str(extra),
+                           '--lofo-settings', 'ft-only+signed+carried+aug', '--augment-tare',
+                           '0.5', '--augment-torque', '0.333,3', '--lofo-label-start', '0.03',
+                           '--seeds', '0', '--jobs', '1', '--out', str(out),
+                           '--load-threshold', '2', '--load-frames', '20', '--load-support',
+                           '0.15', '--load-support-frames', '25', '--load2-threshold', '2',
+                           '--load2-frames', '40', '--load2-support', '0',
+                           '--load2-support-frames', '1', '--load2-direction', '-0.4',
+                           '--load2-steady', '0.5']) == 0
+    # per family left out: caught/trials, early, median [ms] of the shipped rule
+    swept = {r[2]: (r[3], int(r[4].split()[0]), r[6])
+             for r in ([c.strip() for c in line.strip('|').split('|')]
+                       for line in out.read_text().split('## Every family')[1].splitlines()
+                       if line.startswith('| ft-only') and 'steady10' in line)}
+    assert sorted(swept) == sorted({t.condition for t in data['trials'].values()})
+    scripts = Path(__file__).parents[2] / 'benchmarks'
+    for extra_args, same in (([], False), (['--train-only', extra], True)):
+        counts = tmp_path / 'rules.json'
+        subprocess.run([sys.executable, scripts / 'lofo_rules.py', data['bags'], '--recipe',
+                        'ft-only', *extra_args, '--seeds', '0', '--jobs', '1', '--json',
+                        counts], check=True, capture_output=True)
+        by_family = json.loads(counts.read_text())['summary']['S']['by_family']
+        scored = {family: (f"{f['detected']}/{f['trials']}", f['premature'],
+                           '-' if f['latency_ms_median'] is None
+                           else f"{f['latency_ms_median']:.0f}")
+                  for family, f in by_family.items() if family != 'all'}
+        # without the training-only trials the forests differ: so do some medians
+        assert (scored == swept) is same
+    # a folder both scored and only trained on is refused
+    refused = subprocess.run([sys.executable, scripts / 'lofo_rules.py', data['bags'],
+                              '--train-only', data['bags']], capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert 'a folder is both scored and only trained on' in refused.stderr
+
+
 def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data, tmp_path,
                                                                             capsys):
     bags = str(data['bags'])
