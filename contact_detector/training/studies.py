@@ -307,9 +307,10 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     others; default: every family, the figure to choose by); a name no trial has raises
     ConfigError. ``load`` (the load paths' :class:`DecisionRule` fields) adds the shipped rule
     with those load paths, second after the shipped rule (see :func:`load_rules`).
-    ``train_only`` (as ``trials``, keys distinct from its) are trials every fold also trains
-    on, augmented as the others, except those of the family left out, and none is scored: a
-    learning curve on the same scored trials. Returns markdown.
+    ``train_only`` (the form of ``trials``, other keys: a shared one raises ConfigError) are
+    trials every fold also trains on, augmented as the others, except those of the family
+    left out, and none is scored: a learning curve on the same scored trials. Returns
+    markdown.
     """
     check_min_samples_leaf(min_samples_leaf)
     check_splitter(splitter)
