@@ -149,6 +149,14 @@ def data(tmp_path_factory):
             'bundle': load_bundle(path=model)}
 
 
+def _write_folder(trials, out: Path) -> Path:
+    """Write ``trials`` as bags under ``out`` with their manifest; return ``out``."""
+    for trial in trials:
+        write_trial_bag(trial=trial, path=out / trial.name)
+    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=out)
+    return out
+
+
 @pytest.fixture(scope='module')
 def all_rows(data):
     """``contact-detector detect BAGS_DIR`` (the console script) over every trial."""
@@ -434,11 +442,8 @@ def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
 
 def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
     # two simulated folders both have a trial_0000; each must be scored against its own onset
-    other = tmp_path / 'other'
     trials = list(simulate_trials(n=1, seed=SEED + 1, conditions=['paper']))
-    for trial in trials:
-        write_trial_bag(trial=trial, path=other / trial.name)
-    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=other)
+    other = _write_folder(trials, tmp_path / 'other')
     report = tmp_path / 'report'
     assert cli_main.main(['evaluate', str(data['bags'] / 'trial_0000'), str(other),
                           '--model', str(data['model']), '--report', str(report)]) == 0
@@ -453,9 +458,7 @@ def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
 def test_evaluate_reads_each_simulated_trials_motion_phases(tmp_path):
     # a premature release is reported with the phase it fell in (the lift, the descent, ...)
     trials = list(simulate_trials(n=1, seed=SEED + 2, conditions=['heavy']))
-    for trial in trials:
-        write_trial_bag(trial=trial, path=tmp_path / trial.name)
-    write_manifest(trials=[manifest_entry(t) for t in trials], out_dir=tmp_path)
+    _write_folder(trials, tmp_path)
     bag = tmp_path / trials[0].name
     truth = truth_for(bag, [], conditions_of([bag]))
     assert [name for name, _ in truth.phases] == [name for name, _, _ in trials[0].phases]
@@ -1010,11 +1013,8 @@ def test_sweep_lofo_train_only_trains_the_other_folds_on_them_and_scores_none(da
     assert len(families) >= 2
     left = families[0]
     # the train-only folder: copies of family `left`'s trials under another folder
-    extra = tmp_path / 'extra'
     copies = [t for t in data['trials'].values() if t.condition == left]
-    for trial in copies:
-        write_trial_bag(trial=trial, path=extra / trial.name)
-    write_manifest(trials=[manifest_entry(t) for t in copies], out_dir=extra)
+    extra = _write_folder(copies, tmp_path / 'extra')
     plain, rows_plain = _lofo_shipped(data, tmp_path / 'plain.md', '--trees', '3')
     more, rows_more = _lofo_shipped(data, tmp_path / 'more.md', '--trees', '3',
                                     '--lofo-train-only', str(extra))
@@ -1041,11 +1041,8 @@ def test_sweep_lofo_train_only_trains_the_other_folds_on_them_and_scores_none(da
 def test_lofo_rules_train_only_reproduces_the_sweeps_row(data, tmp_path):
     # benchmarks/lofo_rules.py --train-only, the command behind the F/T-only learning curve:
     # its shipped rule S is the sweep's shipped rule with the load paths, on the same forests
-    extra = tmp_path / 'extra'
-    more = list(simulate_trials(n=6, seed=SEED + 1, conditions=['all']))
-    for trial in more:
-        write_trial_bag(trial=trial, path=extra / trial.name)
-    write_manifest(trials=[manifest_entry(t) for t in more], out_dir=extra)
+    extra = _write_folder(simulate_trials(n=6, seed=SEED + 1, conditions=['all']),
+                          tmp_path / 'extra')
     out = tmp_path / 'lofo.md'
     assert sweep_cli.main([str(data['bags']), '--lofo', '--lofo-train-only', str(extra),
                            '--lofo-settings', 'ft-only+signed+carried+aug', '--augment-tare',
