@@ -86,6 +86,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     chosen: List[str] = args.detector or ['forest']
     detectors = list(DETECTORS) if 'all' in chosen else list(dict.fromkeys(chosen))
+    # a model no chosen detector runs is a mistaken flag, not a choice: say so before any work
+    if args.model is not None and 'forest-ft' in detectors and not {
+            'forest', 'forest-both'} & set(detectors):
+        parser.error('--model is the model of the forest detectors; --detector forest-ft '
+                     'takes its model from --ft-model')
+    if args.ft_model is not None and 'forest-ft' not in detectors:
+        parser.error('--ft-model is the model of --detector forest-ft, which is not chosen')
     try:
         make, stream = build_detector_factory(model=args.model, params_file=args.params,
                                               audio_rate=args.audio_rate)

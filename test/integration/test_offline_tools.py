@@ -440,6 +440,24 @@ def test_evaluate_all_detectors_report(data, all_rows, tmp_path, capsys):
     assert metrics['forest']['frames']['contact']['support'] > 0
 
 
+def test_evaluate_refuses_a_model_flag_no_chosen_detector_runs(data, tmp_path, capsys):
+    # --model with only forest-ft would score the shipped F/T-only model under the user's nose
+    bag, model = str(data['bags'] / 'trial_0000'), str(data['model'])
+    report = tmp_path / 'report'
+    for args, message in (
+            (['--detector', 'forest-ft', '--model', model],
+             '--detector forest-ft takes its model from --ft-model'),
+            (['--detector', 'forest', '--ft-model', model],
+             '--ft-model is the model of --detector forest-ft, which is not chosen')):
+        with pytest.raises(SystemExit) as exit_info:
+            cli_main.main(['evaluate', bag, *args, '--report', str(report)])
+        assert exit_info.value.code == 2
+        assert message in capsys.readouterr().err
+        assert not report.exists()
+    # the same model given to the detector that runs it is taken
+    assert cli_main.main(['evaluate', bag, '--detector', 'forest', '--model', model]) == 0
+
+
 def test_evaluate_takes_each_bags_truth_from_its_own_folder(data, tmp_path):
     # two simulated folders both have a trial_0000; each must be scored against its own onset
     trials = list(simulate_trials(n=1, seed=SEED + 1, conditions=['paper']))
