@@ -112,8 +112,9 @@ def add_feature_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--sustain-frames', type=int, default=DEFAULT_RULE.sustain_frames,
                         help='slow path: also contact when the mean P(contact) of this many '
                              'frames >= --sustain-threshold (0 = off)')
-    parser.add_argument('--sustain-threshold', type=float,
-                        default=DEFAULT_RULE.sustain_threshold)
+    parser.add_argument('--sustain-threshold', type=float, default=None,
+                        help=f'(default {DEFAULT_RULE.sustain_threshold:g}; with --no-audio '
+                             f'{DEFAULT_FT_ONLY_RULE.sustain_threshold:g})')
     parser.add_argument('--evidence-threshold', type=float,
                         default=DEFAULT_RULE.evidence_threshold,
                         help='evidence path: also contact when the sum of P(contact) - '
@@ -192,19 +193,18 @@ def rule_from_args(args: argparse.Namespace) -> DecisionRule:
     """
     Build the DecisionRule from parsed options.
 
-    The load paths' options not given take the defaults of the model kind: the F/T-only
-    recipe's with ``--no-audio``, else the multimodal one's.
+    The slow path's threshold and the load paths' options not given take the defaults of the
+    model kind: the F/T-only recipe's with ``--no-audio``, else the multimodal one's.
     """
     kind = DEFAULT_FT_ONLY_RULE if getattr(args, 'no_audio', False) else DEFAULT_RULE
-    load = {name: (getattr(kind, name) if getattr(args, name, None) is None
-                   else getattr(args, name))
-            for name in LOAD_FIELDS + LOAD2_FIELDS + ('load2_steady',)}
+    by_kind = {name: (getattr(kind, name) if getattr(args, name, None) is None
+                      else getattr(args, name))
+               for name in LOAD_FIELDS + LOAD2_FIELDS + ('load2_steady', 'sustain_threshold')}
     return DecisionRule(threshold=args.threshold, confirm_frames=args.confirm_frames,
                         refractory_s=args.refractory, average_frames=args.average_frames,
                         sustain_frames=args.sustain_frames,
-                        sustain_threshold=args.sustain_threshold,
                         evidence_threshold=args.evidence_threshold,
-                        evidence_drift=args.evidence_drift, **load)
+                        evidence_drift=args.evidence_drift, **by_kind)
 
 
 def config_from_args(args: argparse.Namespace) -> FeatureConfig:

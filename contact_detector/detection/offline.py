@@ -184,7 +184,11 @@ def run_both(events: Iterable[Event], *, pair: AudioFallback, in_blocks: bool = 
     Each model runs over the whole recording as :func:`run_detector` runs one (in blocks where
     it can), and :meth:`~contact_detector.detection.fallback.AudioFallback.combine` takes the
     earlier of their first releases and merges the contact events: what the pair gives message
-    by message while the audio keeps coming. The frames are the multimodal model's.
+    by message while the audio keeps coming, except that message by message an F/T-only
+    release less than one audio chunk after the audio model's comes first (its wrench sample
+    arrives before the chunk that completes the audio frame), so the node's release can be
+    that much later (docs/node.md, "Two models decide"). The frames are the multimodal
+    model's.
 
     Parameters
     ----------

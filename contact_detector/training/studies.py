@@ -35,7 +35,8 @@ from contact_detector.model.rule import DecisionRule
 from contact_detector.training.augmentation import AUGMENTED, WrenchAugmentation
 from contact_detector.training.protocol import (check_min_samples_leaf, check_splitter,
                                                 LabelWindow)
-from contact_detector.training.recipe import DEFAULT_FEATURES, DEFAULT_RULE, PREVIOUS_RULE
+from contact_detector.training.recipe import (DEFAULT_FEATURES, DEFAULT_FT_ONLY_RULE,
+                                              DEFAULT_RULE, PREVIOUS_RULE)
 from contact_detector.training.sweep import (best_row, compute_frames, FeatureSetting,
                                              fit_forest, leave_one_family_out, model_rules,
                                              rows_markdown, rule_grid, score_model,
@@ -306,7 +307,8 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
     ``families`` leaves only those families out in turn (every forest still trains on all the
     others; default: every family, the figure to choose by); a name no trial has raises
     ConfigError. ``load`` (the load paths' :class:`DecisionRule` fields) adds the shipped rule
-    with those load paths, second after the shipped rule (see :func:`load_rules`).
+    with those load paths, second after the shipped rule (see :func:`load_rules`), then the
+    same with the F/T-only model's slow path (``DEFAULT_FT_ONLY_RULE.sustain_threshold``).
     ``train_only`` (the form of ``trials``, other keys: a shared one raises ConfigError) are
     trials every fold also trains on, augmented as the others, except those of the family
     left out, and none is scored: a learning curve on the same scored trials. Returns
@@ -339,7 +341,11 @@ def lofo_study(*, trials: Dict[str, tuple], settings: Sequence[str], label: Labe
                 + (frames_of(config, augmented, scored=False) if train_only else []))
 
     rules = lofo_rules()
-    rules[1:1] = load_rules(base=DEFAULT_RULE, load=load)
+    # the load paths on the multimodal model's slow path (0.4, the F/T-only rule before
+    # 2026-12-07) and on the F/T-only model's (0.45), so that tables of either are rerun
+    ft_base = replace(DEFAULT_RULE, sustain_threshold=DEFAULT_FT_ONLY_RULE.sustain_threshold)
+    rules[1:1] = (load_rules(base=DEFAULT_RULE, load=load)
+                  + load_rules(base=ft_base, load=load))
     worst_lines = ['| setting | rule | worst family | detected | premature (after) | '
                    'median [ms] | p95 [ms] | all families: detected / premature | '
                    'knocked on the hand, all families: detected / premature / median [ms] |',

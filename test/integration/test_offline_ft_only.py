@@ -153,10 +153,11 @@ def test_train_no_audio_options_override_the_ft_only_defaults(no_audio, tmp_path
                           '--trees', '1', '--augment', '--label-start', '0',
                           '--event-weight', '2', '--augment-tare', '0.1',
                           '--load-threshold', '0', '--load2-threshold', '0',
-                          '--out', str(model)]) == 0
+                          '--sustain-threshold', '0.3', '--out', str(model)]) == 0
     bundle = load_bundle(path=model)
     assert bundle.label_window == {'start_s': 0.0, 'end_s': 0.3, 'event_weight': 2.0}
     assert not bundle.decision_rule.uses_load
+    assert bundle.decision_rule.sustain_threshold == 0.3
     assert bundle.training['augmentation']['tare_probability'] == 0.1
     assert bundle.training['augmentation']['torque_scale'] == [0.333, 3.0]
 

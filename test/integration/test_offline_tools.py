@@ -1072,10 +1072,11 @@ def test_lofo_rules_train_only_reproduces_the_sweeps_row(data, tmp_path):
                            '--load2-support-frames', '1', '--load2-direction', '-0.4',
                            '--load2-steady', '0.5']) == 0
     # per family left out: caught/trials, early, median [ms] of the shipped rule
+    shipped = recipe.DEFAULT_FT_ONLY_RULE.short()
     swept = {r[2]: (r[3], int(r[4].split()[0]), r[6])
              for r in ([c.strip() for c in line.strip('|').split('|')]
                        for line in out.read_text().split('## Every family')[1].splitlines()
-                       if line.startswith('| ft-only') and 'steady10' in line)}
+                       if line.startswith(f'| ft-only+signed+carried+aug | {shipped} |'))}
     assert sorted(swept) == sorted({t.condition for t in data['trials'].values()})
     scripts = Path(__file__).parents[2] / 'benchmarks'
     for extra_args, same in (([], False), (['--train-only', extra], True)):

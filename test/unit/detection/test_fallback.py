@@ -144,10 +144,11 @@ def _one_by_one(pair: AudioFallback, events: list) -> tuple:
     return releases + d.releases, contact_events + d.events
 
 
-@pytest.mark.parametrize('index, by', [(0, FT_ONLY), (1, MULTIMODAL)])
-def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, index, by):
-    # paper trials of seed 5: in trial 0 the F/T-only model releases 12 ms before the audio
-    # model, in trial 1 the audio model 8 ms before it
+@pytest.mark.parametrize('index, by, live_by', [(0, MULTIMODAL, FT_ONLY), (1, FT_ONLY, FT_ONLY)])
+def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, index, by,
+                                                                       live_by):
+    # paper trials of seed 5: in trial 0 the audio model's release frame is 8 ms before the
+    # F/T-only model's, in trial 1 the F/T-only model's 2 ms before the audio model's
     trial = simulate_trial(seed=5, index=index, condition='paper')
     events = [node_support.sensor_event(trial, e) for e in message_events(trial=trial)]
     alone = [run_detector(events, detector=ContactDetector(bundle=b, settings=DetectorSettings()))
@@ -160,10 +161,18 @@ def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, 
     np.testing.assert_array_equal(offline.p, alone[0].p)      # the frames are the audio model's
     live = _pair(bundles)
     releases, contact_events = _one_by_one(live, events)
-    assert releases == offline.releases and contact_events == offline.events
-    assert live.last_release_by == by and not live.armed
+    assert len(releases) == 1 and live.last_release_by == live_by and not live.armed
+    # Offline the earlier frame is the release. On the node the first release decided is: an
+    # F/T-only frame is decided when its wrench sample arrives, an audio frame only when the
+    # audio chunk that completes it does, so an F/T-only release less than one audio chunk
+    # after the audio model's comes first there (docs/node.md, "Two models decide").
+    chunk_s = (max(len(e.samples) for e in events if isinstance(e, AudioEvent))
+               / trial.audio_rate)
+    assert offline.releases[0] <= releases[0] <= offline.releases[0] + chunk_s
+    if live_by == by:
+        assert releases == offline.releases and contact_events == offline.events
     assert not live.primary.armed and not live.fallback.armed     # one release per arming
-    assert live.counts['releases'] == 1 and live.counts['ft_releases'] == (by == FT_ONLY)
+    assert live.counts['releases'] == 1 and live.counts['ft_releases'] == (live_by == FT_ONLY)
 
 
 def test_both_decide_rearms_both_and_offline_refuses_a_timeout(bundles):
