@@ -145,8 +145,8 @@ def _one_by_one(pair: AudioFallback, events: list) -> tuple:
 
 
 @pytest.mark.parametrize('index, by, live_by', [(0, MULTIMODAL, FT_ONLY), (1, FT_ONLY, FT_ONLY)])
-def test_both_decide_node_and_offline_give_the_first_release_of_either(bundles, index, by,
-                                                                       live_by):
+def test_both_decide_node_and_offline_release_once_within_one_audio_chunk(bundles, index, by,
+                                                                          live_by):
     # paper trials of seed 5: in trial 0 the audio model's release frame is 8 ms before the
     # F/T-only model's, in trial 1 the F/T-only model's 2 ms before the audio model's
     trial = simulate_trial(seed=5, index=index, condition='paper')
