@@ -145,7 +145,7 @@ def _one_by_one(pair: AudioFallback, events: list) -> tuple:
 
 
 def _first_trial_released_first_by(bundles, by: str) -> tuple:
-    """The first paper trial of seed 5 whose first release alone is ``by``'s model's."""
+    """Return the first paper trial of seed 5 whose first release alone is ``by``'s model's."""
     for index in range(20):
         trial = simulate_trial(seed=5, index=index, condition='paper')
         events = [node_support.sensor_event(trial, e) for e in message_events(trial=trial)]
