@@ -27,7 +27,7 @@ import sys
 from typing import Sequence
 
 from contact_detector.errors import ContactDetectorError
-from contact_detector.sim.bag_writer import STORAGES, write_trials
+from contact_detector.sim.bag_writer import held_difference, STORAGES, write_trials
 from contact_detector.sim.conditions import (ALIASES, BRUSH_MODES, CONDITION_SETS,
                                              CONTACT_SOUND_MODES, EVENT_MODES,
                                              resolve_conditions, TARED_MODES)
@@ -104,6 +104,11 @@ def build_parser() -> argparse.ArgumentParser:
                              'per event)')
     parser.add_argument('--overwrite', action='store_true',
                         help='replace existing trial_* bags and manifest.json in OUT_DIR')
+    parser.add_argument('--reuse', action='store_true',
+                        help='keep OUT_DIR as it is if its manifest.json says these very '
+                             'trials (every setting above the same) and every bag it lists '
+                             'is there; other trials in OUT_DIR are an error, or replaced '
+                             'with --overwrite')
     parser.add_argument('--quiet', action='store_true', help='no progress bar or summary')
     return parser
 
@@ -152,7 +157,29 @@ def main(argv: Sequence[str] | None = None) -> int:
                        sensor_offset=args.sensor_offset)
     except ContactDetectorError as err:
         parser.error(str(err))
+    settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
+                'conditions': list(conditions), 'storage': args.storage,
+                'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
+                'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
+                'events': args.events, 'tared': args.tared, 'hits': args.hits}
+    if args.contact_sound != 'family':
+        # older manifests have no such key: 'family' is their mode
+        settings['contact_sound'] = args.contact_sound
+    if args.brushes != 'lifting':
+        settings['brushes'] = args.brushes
+    if args.sensor_offset is not None:
+        settings['sensor_offset'] = list(args.sensor_offset)
     try:
+        if args.reuse:
+            other = held_difference(out_dir=args.out_dir, settings=settings)
+            if other == ():
+                if not args.quiet:
+                    print(f'{args.out_dir} already holds these {args.trials} trials; reused')
+                return 0
+            if other and not args.overwrite:
+                raise ContactDetectorError(
+                    f'{args.out_dir} holds other simulated trials (other {", ".join(other)}); '
+                    'use --overwrite or another OUT_DIR')
         _prepare(args.out_dir, overwrite=args.overwrite)
         trials = simulate_trials(n=args.trials, seed=args.seed, conditions=conditions,
                                  start_index=args.start_index, audio_rate=args.audio_rate,
@@ -161,18 +188,6 @@ def main(argv: Sequence[str] | None = None) -> int:
                                  tared=args.tared, hits=args.hits,
                                  contact_sound=args.contact_sound, brushes=args.brushes,
                                  sensor_offset=args.sensor_offset)
-        settings = {'seed': args.seed, 'trials': args.trials, 'start_index': args.start_index,
-                    'conditions': list(conditions), 'storage': args.storage,
-                    'audio_rate': args.audio_rate, 'ft_rate': args.ft_rate,
-                    'chunk_size': args.chunk_size, 'label_window_s': args.label_window,
-                    'events': args.events, 'tared': args.tared, 'hits': args.hits}
-        if args.contact_sound != 'family':
-            # older manifests have no such key: 'family' is their mode
-            settings['contact_sound'] = args.contact_sound
-        if args.brushes != 'lifting':
-            settings['brushes'] = args.brushes
-        if args.sensor_offset is not None:
-            settings['sensor_offset'] = list(args.sensor_offset)
         records, manifest = write_trials(
             trials=tqdm(trials, total=args.trials, desc='simulate', unit='trial',
                         disable=args.quiet),

@@ -35,7 +35,8 @@ from typing import Iterable, Mapping
 
 from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (AUDIO_TOPIC, AUDIO_TYPE, jazzy_typestore, MANIFEST_NAME,
-                                      TRUTH_TOPIC, TRUTH_TYPE, WRENCH_TOPIC, WRENCH_TYPE)
+                                      read_manifest, TRUTH_TOPIC, TRUTH_TYPE, WRENCH_TOPIC,
+                                      WRENCH_TYPE)
 from contact_detector.sim.trial import Trial
 import numpy as np
 from rosbags.rosbag1 import Writer as Ros1Writer
@@ -124,6 +125,13 @@ def ros1_int16_multiarray(data: np.ndarray) -> bytes:
     return (struct.pack('<II7sIIII', 1, 7, b'samples', n, n, 0, n) + data.tobytes())
 
 
+def bag_path(*, path: Path, storage: str) -> Path:
+    """Return the bag :func:`write_trial_bag` writes for ``path``: ROS 1 appends ``.bag``."""
+    if storage == 'ros1' and path.suffix != '.bag':
+        return path.with_name(path.name + '.bag')
+    return path
+
+
 def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
                     audio: bool = True) -> Path:
     """
@@ -156,9 +164,7 @@ def write_trial_bag(*, trial: Trial, path: Path, storage: str = 'sqlite3',
     """
     if storage not in STORAGES:
         raise ConfigError(f'storage must be one of {sorted(STORAGES)}, got {storage!r}')
-    path = Path(path)
-    if storage == 'ros1' and path.suffix != '.bag':
-        path = path.with_name(path.name + '.bag')
+    path = bag_path(path=Path(path), storage=storage)
     if path.exists():
         raise BagError(f'{path} already exists')
     ts = jazzy_typestore()
@@ -297,6 +303,89 @@ def write_manifest(*, trials: Iterable[Trial | Mapping], out_dir: Path,
     except (OSError, ValueError) as err:
         raise BagError(f'cannot write manifest {file}: {err}') from err
     return file
+
+
+#: Settings that manifests written before them leave out, and the value the omission means.
+SETTING_DEFAULTS = {'tared': 'family', 'contact_sound': 'family', 'brushes': 'lifting',
+                    'sensor_offset': None}
+
+
+def differing_settings(*, held: Mapping, wanted: Mapping, ft_rate_tolerance: float = 0.0
+                       ) -> tuple[str, ...]:
+    """
+    Return the settings in which a manifest's trials differ from those ``wanted`` describes.
+
+    Both are the ``settings`` of a manifest (what ``contact-detector simulate`` writes: seed,
+    trials, start_index, conditions, storage, rates, events, ...). A key in
+    :data:`SETTING_DEFAULTS` that either leaves out takes its default, so trials simulated
+    before the key existed still match. The F/T rates match when
+    ``|held / wanted - 1| <= ft_rate_tolerance``.
+
+    Parameters
+    ----------
+    held, wanted : mapping
+        The settings of the trials on disk and of the trials asked for.
+    ft_rate_tolerance : float
+        Relative tolerance of the F/T rate (0: equal).
+
+    Returns
+    -------
+    tuple of str
+        The differing keys, sorted; empty when the trials are the same.
+
+    """
+    have = {**SETTING_DEFAULTS, **held}
+    want = {**SETTING_DEFAULTS, **wanted}
+    out = {k for k in have.keys() | want.keys() if k != 'ft_rate' and have.get(k) != want.get(k)}
+    try:
+        if abs(float(have['ft_rate']) / float(want['ft_rate']) - 1.0) > ft_rate_tolerance:
+            out.add('ft_rate')
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        if have.get('ft_rate') != want.get('ft_rate'):
+            out.add('ft_rate')
+    return tuple(sorted(out))
+
+
+def held_difference(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: float = 0.0
+                    ) -> tuple[str, ...] | None:
+    """
+    Say whether ``out_dir`` already holds the trials ``settings`` describe.
+
+    Parameters
+    ----------
+    out_dir : Path
+        A folder that ``contact-detector simulate`` may have written.
+    settings : mapping
+        The manifest settings of the trials asked for.
+    ft_rate_tolerance : float
+        As :func:`differing_settings`.
+
+    Returns
+    -------
+    tuple of str or None
+        None: ``out_dir`` has no manifest. Empty: it holds these very trials, every bag its
+        manifest lists is there. Otherwise what differs: the keys of
+        :func:`differing_settings`, or ``'bags'`` when some are missing.
+
+    Raises
+    ------
+    BagError
+        The manifest cannot be read (:func:`contact_detector.io.bags.read_manifest`).
+
+    """
+    if not (Path(out_dir) / MANIFEST_NAME).is_file():
+        return None
+    held = read_manifest(out_dir)
+    other = differing_settings(held=held.get('settings') or {}, wanted=settings,
+                               ft_rate_tolerance=ft_rate_tolerance)
+    if other:
+        return other
+    storage = str(settings.get('storage', 'sqlite3'))
+    names = [str(t.get('bag') or '') if isinstance(t, dict) else '' for t in held['trials']]
+    complete = len(names) == settings.get('trials') and all(
+        name and bag_path(path=Path(out_dir) / name, storage=storage).exists()
+        for name in names)
+    return () if complete else ('bags',)
 
 
 def write_trials(*, trials: Iterable[Trial], out_dir: Path, storage: str = 'sqlite3',

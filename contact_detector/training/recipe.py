@@ -23,7 +23,6 @@ test recordings.
 
 from collections import Counter
 from dataclasses import dataclass, replace
-import json
 from pathlib import Path
 from typing import Callable, Dict, Iterable, Optional, Sequence, Tuple
 
@@ -35,11 +34,12 @@ from contact_detector.evaluation.metrics import score_onsets, score_trial, summa
 from contact_detector.evaluation.truth import truth_for
 from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig, SHIFT_FEATURES)
+from contact_detector.io.bags import read_manifest
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.rule import DecisionRule
-from contact_detector.sim.bag_writer import write_trials
+from contact_detector.sim.bag_writer import held_difference, write_trials
 from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
@@ -228,26 +228,25 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_
     BagError
         ``sim_dir`` holds other simulator output: other trials, seeds, events or audio rate,
         an F/T rate more than 1 % away (one recording more or less moves the median a little),
-        or trials made before ``--with-sim`` added the mixed part (a ``manifest.json`` in
-        ``sim_dir`` itself).
+        a part whose manifest lists bags that are gone, or trials made before ``--with-sim``
+        added the mixed part (a ``manifest.json`` in ``sim_dir`` itself).
 
     """
     if (sim_dir / 'manifest.json').exists():
-        held = json.loads((sim_dir / 'manifest.json').read_text())
+        held = read_manifest(sim_dir)
         raise BagError(f'{sim_dir} holds other simulated trials ({held.get("settings")}); '
                        'give an empty or new --sim-dir')
     parts = sim_parts(n=n, seed=seed, ft_rate=ft_rate, audio_rate=audio_rate)
     held = {}
     for name, settings in parts.items():     # every part checked before any is simulated
-        manifest = sim_dir / name / 'manifest.json'
-        if manifest.exists():
-            held[name] = json.loads(manifest.read_text())
-            have = dict(held[name].get('settings', {}))
-            have.setdefault('tared', 'family')  # trials simulated before --tared existed
-            same_rate = abs(float(have.pop('ft_rate', 0.0)) / ft_rate - 1.0) <= 0.01
-            if not same_rate or have != {k: v for k, v in settings.items() if k != 'ft_rate'}:
-                raise BagError(f'{sim_dir / name} holds other simulated trials '
-                               f'({held[name].get("settings")}); give an empty or new --sim-dir')
+        # one recording more or less moves the median F/T rate a little
+        other = held_difference(out_dir=sim_dir / name, settings=settings,
+                                ft_rate_tolerance=0.01)
+        if other:
+            raise BagError(f'{sim_dir / name} holds other simulated trials (other '
+                           f'{", ".join(other)}); give an empty or new --sim-dir')
+        if other == ():
+            held[name] = read_manifest(sim_dir / name)
     out = SimulatedSet(bags=[], parts={}, reused=tuple(held))
     for name, settings in parts.items():
         part_dir = sim_dir / name

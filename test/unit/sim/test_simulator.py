@@ -25,7 +25,7 @@ from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (iter_messages, jazzy_typestore, read_audio, read_manifest,
                                       read_truth, read_wrench)
 from contact_detector.sim import sound_bank
-from contact_detector.sim.bag_writer import write_trial_bag
+from contact_detector.sim.bag_writer import differing_settings, write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              LATER_SETS, ORIGINAL_SETS, ranges_markdown,
                                              REAL_SOUND_SETS, resolve_conditions, TARED_MODES)
@@ -421,6 +421,53 @@ def test_simulate_refuses_to_overwrite(tmp_path, capsys):
     assert (out / 'trial_0000' / 'trial_0000.mcap').is_file()
     with pytest.raises(SystemExit):
         simulate_main([str(out), '--conditions', 'kitchen'])
+
+
+def test_simulate_reuse_keeps_the_same_trials_and_refuses_others(tmp_path, capsys):
+    out = tmp_path / 'run'
+    args = [str(out), '--trials', '2', '--seed', '3', '--conditions', 'paper']
+    assert simulate_main([*args, '--quiet']) == 0
+    bag = out / 'trial_0001'
+    written = {p: p.stat().st_mtime_ns for p in sorted(out.rglob('*'))}
+    capsys.readouterr()
+
+    # the same command with --reuse: nothing simulated, nothing touched
+    assert simulate_main([*args, '--reuse']) == 0
+    assert 'already holds these 2 trials; reused' in capsys.readouterr().out
+    assert {p: p.stat().st_mtime_ns for p in sorted(out.rglob('*'))} == written
+
+    # other trials (another seed): refused, and OUT_DIR left as it was
+    assert simulate_main([*args[:-4], '--seed', '4', '--conditions', 'paper', '--reuse',
+                          '--quiet']) == 1
+    assert 'holds other simulated trials (other seed)' in capsys.readouterr().err
+    assert read_manifest(out)['settings']['seed'] == 3
+
+    # a bag its manifest lists is gone: refused, then simulated again with --overwrite
+    shutil.rmtree(bag)
+    assert simulate_main([*args, '--reuse', '--quiet']) == 1
+    assert '(other bags)' in capsys.readouterr().err
+    assert simulate_main([*args, '--reuse', '--overwrite', '--quiet']) == 0
+    assert bag.is_dir()
+    # and with --overwrite other trials are replaced
+    assert simulate_main([*args[:-4], '--seed', '4', '--conditions', 'paper', '--reuse',
+                          '--overwrite', '--quiet']) == 0
+    assert read_manifest(out)['settings']['seed'] == 4
+
+
+def test_settings_left_out_by_older_manifests_take_their_defaults():
+    wanted = {'seed': 1, 'trials': 4, 'ft_rate': 100.0, 'tared': 'family', 'hits': None}
+    older = {'seed': 1, 'trials': 4, 'ft_rate': 100.0, 'hits': None}   # before --tared
+    assert differing_settings(held=older, wanted=wanted) == ()
+    assert differing_settings(held=older, wanted={**wanted, 'tared': 'all'}) == ('tared',)
+    assert differing_settings(held={**older, 'brushes': 'lifting'}, wanted=wanted) == ()
+    assert differing_settings(held={**older, 'brushes': 'friction'}, wanted=wanted) == (
+        'brushes',)
+    # F/T rates: equal by default, within a relative tolerance when one is given
+    assert differing_settings(held={**older, 'ft_rate': 100.5}, wanted=wanted) == ('ft_rate',)
+    assert differing_settings(held={**older, 'ft_rate': 100.5}, wanted=wanted,
+                              ft_rate_tolerance=0.01) == ()
+    assert differing_settings(held={**older, 'seed': 2, 'ft_rate': 'x'}, wanted=wanted) == (
+        'ft_rate', 'seed')
 
 
 def test_manifest_schema(manifest):

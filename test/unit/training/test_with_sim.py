@@ -51,3 +51,14 @@ def test_a_refused_sim_dir_gets_no_new_trials(tmp_path):
     with pytest.raises(BagError, match='holds other simulated trials'):
         simulated_trials(sim_dir=tmp_path, n=8, seed=0, ft_rate=125.0, audio_rate=16000)
     assert sorted(p.name for p in tmp_path.iterdir()) == ['mixed']
+
+
+def test_a_part_whose_bags_are_gone_is_refused(tmp_path):
+    # its manifest says the right trials, but the bags it lists are not there
+    settings = sim_parts(n=8, seed=0, ft_rate=125.0, audio_rate=16000)['mixed']
+    (tmp_path / 'mixed').mkdir()
+    (tmp_path / 'mixed' / 'manifest.json').write_text(json.dumps(
+        {'settings': settings, 'trials': [{'bag': f'trial_{i:04d}'} for i in range(6, 8)]}))
+    with pytest.raises(BagError, match=r'holds other simulated trials \(other bags\)'):
+        simulated_trials(sim_dir=tmp_path, n=8, seed=0, ft_rate=125.0, audio_rate=16000)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['mixed']
