@@ -18,7 +18,7 @@ Variants of a shipped model's decision rule, each family left out, with the knoc
     .venv/bin/python benchmarks/lofo_rules.py DIR... [--recipe ft-only|multimodal]
         [--rule NAME:FIELD=VALUE[,FIELD=VALUE...]]... [--seeds 0,1,2] [--jobs 2]
         [--families] [--json out.json] [--splitter best|random] [--drop GROUP]...
-        [--train-only DIR]...
+        [--train-only DIR]... [--outcomes OUT.json]
 
 Trains the forests of ``contact-detector sweep --lofo`` with a shipped recipe (its feature
 setting, labels, wrench augmentation and event weight: ``ft-only`` is
@@ -38,10 +38,12 @@ two cores. ``--drop GROUP`` trains and scores the forests without a feature grou
 :data:`GROUPS` (``benchmarks/generator_ablation.py``). ``--train-only DIR`` adds trials that
 every fold trains on (augmented, except those of the family left out) and none is scored on,
 keyed as ``sweep --lofo-train-only`` keys them, so ``S`` reproduces that sweep's row.
+``--outcomes`` writes every rule's verdict on every trial and forest seed (the trial keyed by
+its folder), which ``benchmarks/lofo_either.py`` combines with another recipe's.
 """
 
 import argparse
-from dataclasses import fields, replace
+from dataclasses import asdict, fields, replace
 import json
 from pathlib import Path
 import sys
@@ -228,6 +230,9 @@ def main(argv=None) -> int:
                              "'random' (extremely randomized trees)")
     parser.add_argument('--drop', action='append', default=[], choices=sorted(GROUPS),
                         help='a feature group the forests leave out (generator_ablation.py)')
+    parser.add_argument('--outcomes', type=Path, default=None, metavar='OUT.json',
+                        help="every rule's outcome on every trial and forest seed, as JSON "
+                             '(benchmarks/lofo_either.py combines two such files)')
     parser.add_argument('--train-only', action='append', default=[], type=Path,
                         metavar='DIR',
                         help='trials every fold also trains on (except those of the family '
@@ -245,21 +250,27 @@ def main(argv=None) -> int:
     keys = list(frames)
     outcomes = {name: [] for name in rules}
     knocked = {name: [] for name in rules}
+    records = {name: [] for name in rules}
     for seed in (int(s) for s in args.seeds.split(',')):
         for fold in leave_one_family_out(frames=list(frames.values()), setting=setting,
                                          rules=list(rules.values()), n_estimators=10,
                                          seed=seed, jobs=args.jobs, fit_frames=fit,
                                          splitter=args.splitter):
-            test = [frames[k] for k in keys if frames[k].truth.condition == fold.family]
+            test = [k for k in keys if frames[k].truth.condition == fold.family]
             for name, row in zip(rules, fold.rows):
                 outcomes[name] += row.outcomes
-                knocked[name] += [o for o, f in zip(row.outcomes, test)
-                                  if knocked_in_air(f.truth)]
+                knocked[name] += [o for o, k in zip(row.outcomes, test)
+                                  if knocked_in_air(frames[k].truth)]
+                records[name] += [{'seed': seed, 'trial': k,
+                                   'knocked': knocked_in_air(frames[k].truth), **asdict(o)}
+                                  for o, k in zip(row.outcomes, test)]
         print(f'seed {seed}: every family left out', file=sys.stderr, flush=True)
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in rules}
     print_rules(summary, families=args.families)
     write_json(args.json, rules=rules, summary=summary)
+    if args.outcomes is not None:
+        args.outcomes.write_text(json.dumps({'recipe': args.recipe, 'outcomes': records}))
     return 0
 
 

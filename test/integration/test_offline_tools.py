@@ -1098,6 +1098,40 @@ def test_lofo_rules_train_only_reproduces_the_sweeps_row(data, tmp_path):
     assert 'a folder is both scored and only trained on' in refused.stderr
 
 
+def test_lofo_either_takes_the_first_release_of_two_rules(data, tmp_path):
+    # benchmarks/lofo_either.py, the left-out figures of two models deciding (the first release
+    # of either) from lofo_rules.py --outcomes: here two rules of one recipe on one forest
+    scripts = Path(__file__).parents[2] / 'benchmarks'
+    outcomes, counts = tmp_path / 'outcomes.json', tmp_path / 'rules.json'
+    subprocess.run([sys.executable, scripts / 'lofo_rules.py', data['bags'], '--recipe',
+                    'ft-only', '--rule', 'slow:sustain_threshold=0.05', '--seeds', '0',
+                    '--jobs', '1', '--json', counts, '--outcomes', outcomes],
+                   check=True, capture_output=True)
+    records = json.loads(outcomes.read_text())['outcomes']
+    assert len(records['S']) == len(records['slow']) == len(data['trials'])
+    alone = json.loads(counts.read_text())['summary']
+    combined = tmp_path / 'either.json'
+    subprocess.run([sys.executable, scripts / 'lofo_either.py', f'{outcomes}:S',
+                    f'{outcomes}:S', f'{outcomes}:slow', '--json', combined], check=True,
+                   capture_output=True)
+    summary = json.loads(combined.read_text())['summary']
+    # a rule beside itself is the rule alone
+    assert summary['ft-only S | ft-only S'] == alone['S']
+    # beside another: early where either releases before the onset, caught by the first
+    either = summary['ft-only S | ft-only slow']['by_family']['all']
+    by_trial = {r['trial']: r for r in records['S']}
+    first = [min((r, by_trial[r['trial']]), key=lambda o: (o['release_t'] is None,
+                                                          o['release_t'] or 0.0))
+             for r in records['slow']]
+    assert either['premature'] == sum(o['verdict'] == 'premature' for o in first)
+    assert either['premature'] >= max(alone[n]['by_family']['all']['premature']
+                                      for n in ('S', 'slow'))
+    assert either['detected'] == sum(o['verdict'] == 'detected' for o in first)
+    refused = subprocess.run([sys.executable, scripts / 'lofo_either.py', f'{outcomes}:S',
+                              f'{outcomes}:nothing'], capture_output=True, text=True)
+    assert refused.returncode == 1 and "has no rule 'nothing'" in refused.stderr
+
+
 def test_sweep_lofo_families_leaves_only_those_out_and_refuses_unknown_ones(data, tmp_path,
                                                                             capsys):
     bags = str(data['bags'])
