@@ -23,8 +23,8 @@ forest seeds, one file per recipe) and the name of one of its rules (``S``: the 
 Per trial and seed the combined outcome is the outcome of the earlier release, as the node
 decides with ``model.ft_also_decides`` (the first release of either model, once per arming):
 early if that release is early, caught if it is within 500 ms, missed if neither model
-released. A pair of several ``FT_ONLY.json:RULE`` arguments prints one line per pair, each of
-the first argument's rule with one of them. Printed as ``lofo_rules.py`` prints its rules.
+released. Several ``FT_ONLY.json:RULE`` arguments print one line each: the first argument's
+rule beside that one, as ``lofo_rules.py`` prints its rules.
 """
 
 import argparse
