@@ -26,7 +26,7 @@ import shutil
 import sys
 from typing import Sequence
 
-from contact_detector.errors import ContactDetectorError
+from contact_detector.errors import BagError, ContactDetectorError
 from contact_detector.sim.bag_writer import held_difference, STORAGES, write_trials
 from contact_detector.sim.conditions import (ALIASES, BRUSH_MODES, CONDITION_SETS,
                                              CONTACT_SOUND_MODES, EVENT_MODES,
@@ -171,7 +171,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         settings['sensor_offset'] = list(args.sensor_offset)
     try:
         if args.reuse:
-            other = held_difference(out_dir=args.out_dir, settings=settings)
+            try:
+                other = held_difference(out_dir=args.out_dir, settings=settings)
+            except BagError:
+                if not args.overwrite:
+                    raise
+                other = ('manifest',)   # unreadable: --overwrite replaces it with the rest
             if other == ():
                 if not args.quiet:
                     print(f'{args.out_dir} already holds these {args.trials} trials; reused')

@@ -452,6 +452,12 @@ def test_simulate_reuse_keeps_the_same_trials_and_refuses_others(tmp_path, capsy
     assert simulate_main([*args[:-4], '--seed', '4', '--conditions', 'paper', '--reuse',
                           '--overwrite', '--quiet']) == 0
     assert read_manifest(out)['settings']['seed'] == 4
+    # an unreadable manifest: a clear error, or replaced with --overwrite
+    (out / 'manifest.json').write_text('{')
+    assert simulate_main([*args, '--reuse', '--quiet']) == 1
+    assert 'cannot read manifest' in capsys.readouterr().err
+    assert simulate_main([*args, '--reuse', '--overwrite', '--quiet']) == 0
+    assert read_manifest(out)['settings']['seed'] == 3
 
 
 def test_settings_left_out_by_older_manifests_take_their_defaults():
