@@ -1120,9 +1120,11 @@ def test_lofo_either_takes_the_first_release_of_two_rules(data, tmp_path):
     # beside another: early where either releases before the onset, caught by the first
     either = summary['ft-only S | ft-only slow']['by_family']['all']
     by_trial = {r['trial']: r for r in records['S']}
-    first = [min((r, by_trial[r['trial']]), key=lambda o: (o['release_t'] is None,
-                                                          o['release_t'] or 0.0))
-             for r in records['slow']]
+
+    def release(record):
+        return (record['release_t'] is None, record['release_t'] or 0.0)
+
+    first = [min((r, by_trial[r['trial']]), key=release) for r in records['slow']]
     assert either['premature'] == sum(o['verdict'] == 'premature' for o in first)
     assert either['premature'] >= max(alone[n]['by_family']['all']['premature']
                                       for n in ('S', 'slow'))
