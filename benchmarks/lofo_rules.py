@@ -257,13 +257,12 @@ def main(argv=None) -> int:
                                          seed=seed, jobs=args.jobs, fit_frames=fit,
                                          splitter=args.splitter):
             test = [k for k in keys if frames[k].truth.condition == fold.family]
+            hit = [knocked_in_air(frames[k].truth) for k in test]
             for name, row in zip(rules, fold.rows):
                 outcomes[name] += row.outcomes
-                knocked[name] += [o for o, k in zip(row.outcomes, test)
-                                  if knocked_in_air(frames[k].truth)]
-                records[name] += [{'seed': seed, 'trial': k,
-                                   'knocked': knocked_in_air(frames[k].truth), **asdict(o)}
-                                  for o, k in zip(row.outcomes, test)]
+                knocked[name] += [o for o, h in zip(row.outcomes, hit) if h]
+                records[name] += [{'seed': seed, 'trial': k, 'knocked': h, **asdict(o)}
+                                  for o, k, h in zip(row.outcomes, test, hit)]
         print(f'seed {seed}: every family left out', file=sys.stderr, flush=True)
     summary = {name: summarise(outcomes=outcomes[name], knocked=knocked[name])
                for name in rules}

@@ -27,7 +27,7 @@ import sys
 from typing import Sequence
 
 from contact_detector.errors import BagError, ContactDetectorError
-from contact_detector.sim.bag_writer import held_difference, STORAGES, write_trials
+from contact_detector.sim.bag_writer import held_trials, STORAGES, write_trials
 from contact_detector.sim.conditions import (ALIASES, BRUSH_MODES, CONDITION_SETS,
                                              CONTACT_SOUND_MODES, EVENT_MODES,
                                              resolve_conditions, TARED_MODES)
@@ -172,12 +172,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.reuse:
             try:
-                other = held_difference(out_dir=args.out_dir, settings=settings)
+                held, other = held_trials(out_dir=args.out_dir, settings=settings)
             except BagError:
                 if not args.overwrite:
                     raise
-                other = ('manifest',)   # unreadable: --overwrite replaces it with the rest
-            if other == ():
+                held, other = None, ()   # unreadable: --overwrite replaces it with the rest
+            if held is not None and not other:
                 if not args.quiet:
                     print(f'{args.out_dir} already holds these {args.trials} trials; reused')
                 return 0

@@ -346,10 +346,10 @@ def differing_settings(*, held: Mapping, wanted: Mapping, ft_rate_tolerance: flo
     return tuple(sorted(out))
 
 
-def held_difference(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: float = 0.0
-                    ) -> tuple[str, ...] | None:
+def held_trials(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: float = 0.0
+                ) -> tuple[dict | None, tuple[str, ...]]:
     """
-    Say whether ``out_dir`` already holds the trials ``settings`` describe.
+    Read ``out_dir``'s manifest and say whether it holds the trials ``settings`` describe.
 
     Parameters
     ----------
@@ -362,9 +362,9 @@ def held_difference(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: floa
 
     Returns
     -------
-    tuple of str or None
-        None: ``out_dir`` has no manifest. Empty: it holds these very trials, every bag its
-        manifest lists is there. Otherwise what differs: the keys of
+    (dict or None, tuple of str)
+        The manifest (None: ``out_dir`` has none) and what differs: empty when it holds these
+        very trials and every bag it lists is there, else the keys of
         :func:`differing_settings`, or ``'bags'`` when some are missing.
 
     Raises
@@ -374,18 +374,18 @@ def held_difference(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: floa
 
     """
     if not (Path(out_dir) / MANIFEST_NAME).is_file():
-        return None
+        return None, ()
     held = read_manifest(out_dir)
     other = differing_settings(held=held.get('settings') or {}, wanted=settings,
                                ft_rate_tolerance=ft_rate_tolerance)
     if other:
-        return other
+        return held, other
     storage = str(settings.get('storage', 'sqlite3'))
     names = [str(t.get('bag') or '') if isinstance(t, dict) else '' for t in held['trials']]
     complete = len(names) == settings.get('trials') and all(
         name and bag_path(path=Path(out_dir) / name, storage=storage).exists()
         for name in names)
-    return () if complete else ('bags',)
+    return held, () if complete else ('bags',)
 
 
 def write_trials(*, trials: Iterable[Trial], out_dir: Path, storage: str = 'sqlite3',

@@ -39,7 +39,7 @@ from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.rule import DecisionRule
-from contact_detector.sim.bag_writer import held_difference, write_trials
+from contact_detector.sim.bag_writer import held_trials, write_trials
 from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
@@ -240,13 +240,13 @@ def simulated_trials(*, sim_dir: Path, n: int, seed: int, ft_rate: float, audio_
     held = {}
     for name, settings in parts.items():     # every part checked before any is simulated
         # one recording more or less moves the median F/T rate a little
-        other = held_difference(out_dir=sim_dir / name, settings=settings,
-                                ft_rate_tolerance=0.01)
+        manifest, other = held_trials(out_dir=sim_dir / name, settings=settings,
+                                      ft_rate_tolerance=0.01)
         if other:
             raise BagError(f'{sim_dir / name} holds other simulated trials (other '
                            f'{", ".join(other)}); give an empty or new --sim-dir')
-        if other == ():
-            held[name] = read_manifest(sim_dir / name)
+        if manifest is not None:
+            held[name] = manifest
     out = SimulatedSet(bags=[], parts={}, reused=tuple(held))
     for name, settings in parts.items():
         part_dir = sim_dir / name
