@@ -202,3 +202,65 @@ def test_generator_ablation_decides_recordings_without_a_microphone_for_the_ft_o
         slow = figures['by_family']['B/heavy_slow']
         assert slow['trials'] == 3
         assert slow['missed'] < 3, 'no release at all: the recordings had no frames'
+
+
+def test_generator_gate_with_an_open_gate_is_the_model_and_both_is_forest_both(tmp_path):
+    # benchmarks/generator_gate.py, the screen of docs/decisions/2026-12-08-ft-only-gate.md
+    out = tmp_path / 'B'
+    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
+                    '--trials-per-family', '2', '--seed', '13', '--families',
+                    'hsr_side,tiago_mobile', '--jobs', '1'], check=True, capture_output=True)
+    report = tmp_path / 'report'
+    assert evaluate_cli.main([str(out / 'hsr_side'), str(out / 'tiago_mobile'), '--labels',
+                              str(out / 'labels.csv'), '--detector', 'forest', '--detector',
+                              'forest-both', '--report', str(report)]) == 0
+    metrics = json.loads((report / 'metrics.json').read_text())
+    counts = tmp_path / 'gate.json'
+    subprocess.run([sys.executable, BENCHMARKS / 'generator_gate.py', out, '--gate', 'open:0:0.1',
+                    '--gate', 'sure:1:0.01', '--both', '--jobs', '1', '--json', counts],
+                   cwd=tmp_path, capture_output=True, text=True, check=True)
+    scored = {name: figures['by_family']['all']
+              for name, figures in json.loads(counts.read_text())['summary']['all'].items()}
+    keys = ('trials', 'detected', 'late', 'missed', 'premature')
+    for name, detector in (('S', 'forest'), ('open', 'forest'), ('S+ft', 'forest-both'),
+                           ('open+ft', 'forest-both')):
+        expected = metrics[detector]['summary']['all']
+        assert [scored[name][k] for k in keys] == [expected[k] for k in keys], name
+        assert scored[name]['latency_ms_median'] == pytest.approx(
+            expected['latency_ms_median'], abs=0.01)
+    # on these recordings the F/T-only model releases first once: S+ft is not S again
+    assert scored['S+ft']['latency_ms_median'] < scored['S']['latency_ms_median']
+    # a gate only takes contact frames away: it never catches more, nor releases earlier
+    assert scored['sure']['detected'] + scored['sure']['premature'] <= (
+        scored['S']['detected'] + scored['S']['premature'])    # released by 500 ms
+    # a gate on the fast path alone: open, it is the model again; it never catches more
+    subprocess.run([sys.executable, BENCHMARKS / 'generator_gate.py', out, '--gate', 'open:0:0.1',
+                    '--gate', 'sure:1:0.01', '--fast-only', '--jobs', '1', '--json', counts],
+                   cwd=tmp_path, capture_output=True, text=True, check=True)
+    fast = {name: figures['by_family']['all']
+            for name, figures in json.loads(counts.read_text())['summary']['all'].items()}
+    assert [fast['open'][k] for k in keys] == [scored['S'][k] for k in keys]
+
+    def by_500ms(f):
+        return f['detected'] + f['premature']       # released by 500 ms after the onset
+    assert by_500ms(scored['sure']) <= by_500ms(fast['sure']) <= by_500ms(fast['S'])
+    # a gate that is not NAME:FLOOR:WINDOW_S is refused before any work
+    refused = subprocess.run([sys.executable, BENCHMARKS / 'generator_gate.py', out, '--gate',
+                              'bad:2:0.1'], cwd=tmp_path, capture_output=True, text=True)
+    assert refused.returncode == 2 and 'the floor must lie in [0, 1]' in refused.stderr
+
+
+def test_gated_run_starts_an_event_per_gated_run_after_the_refractory_period(monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    import generator_gate
+    import numpy as np
+    t = np.arange(10) * 0.1
+    contact = np.array([0, 0, 1, 0, 1, 1, 1, 0, 0, 1], bool)
+    releases, events = generator_gate.gated_run(t=t, contact=contact, refractory_s=0.5)
+    # runs of contact frames start at 0.2, 0.4 (0.2 s after: the same contact) and 0.9
+    assert releases == [pytest.approx(0.2)] and events == pytest.approx([0.2, 0.9])
+    # the F/T-only model's largest P of (t - window, t]; 0 before its first frame
+    recent = generator_gate.recent_max(t=np.array([0.0, 0.15, 0.3]),
+                                       t_src=np.array([0.1, 0.2, 0.3]),
+                                       p_src=np.array([0.9, 0.2, 0.4]), window_s=0.1)
+    assert recent.tolist() == [0.0, 0.9, 0.4]
