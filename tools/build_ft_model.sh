@@ -46,8 +46,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 data="${1:-$root/data/train_events}"
 data2="${2:-$root/data/train_events_21}"
-# Simulate each training folder unless its manifest already says these trials (--reuse;
-# other trials in it are replaced).
+# Simulate each training folder unless its manifest already says these trials, simulated by
+# this very simulator code (--reuse; other trials in it are replaced).
 .venv/bin/contact-detector simulate "$data" --trials 480 --seed 11 --conditions wide \
   --events everywhere --reuse --overwrite --quiet
 .venv/bin/contact-detector simulate "$data2" --trials 480 --seed 21 --conditions wide \

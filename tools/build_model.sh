@@ -21,10 +21,12 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 data="${1:-$root/data/train}"
 extra="${2:-$root/data/train_extra}"
+# Simulate each training folder unless its manifest already says these trials, simulated by
+# this very simulator code (--reuse; other trials in it are replaced).
 .venv/bin/contact-detector simulate "$data" --trials 480 --seed 11 --conditions wide \
-  --overwrite --quiet
+  --reuse --overwrite --quiet
 .venv/bin/contact-detector simulate "$extra" --trials 120 --seed 12 --conditions wide \
-  --events everywhere --hits mixed --overwrite --quiet
+  --events everywhere --hits mixed --reuse --overwrite --quiet
 .venv/bin/contact-detector train "$data" "$extra" --out models/contact_forest.npz \
   --report models/report --jobs 2 --seed 0 --augment --augment-tare 0.5 --augment-torque 0.1,2 \
   --augment-gain 0.2,1.5 --augment-offset 0.5 --augment-contact-offset 0.05 --event-weight 3

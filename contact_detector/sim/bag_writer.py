@@ -28,6 +28,8 @@ AnyReader both open it):
     True logged at the true contact onset, False where the labelled onset window ends.
 """
 
+from functools import lru_cache
+import hashlib
 import json
 from pathlib import Path
 import struct
@@ -48,6 +50,29 @@ FRAME_ID = 'wrist_ft_sensor_frame'
 STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP, 'ros1': None}
 #: Manifest format version; bump when a field changes meaning.
 MANIFEST_VERSION = 1
+
+
+@lru_cache(maxsize=1)
+def simulator_fingerprint() -> str:
+    """
+    Return a fingerprint of the simulator's code: what a manifest's trials were simulated with.
+
+    The SHA-256 of the source of every module of :mod:`contact_detector.sim`, in file-name
+    order (each file's name, then its bytes), as 16 hex digits. Any edit to the simulator,
+    a comment included, changes it, so trials held from before an edit are never taken for
+    trials of the code that runs now. The real sound bank (``tools/fetch_sounds.sh``) is pinned
+    by that script, not fingerprinted here.
+
+    Returns
+    -------
+    str
+        16 lowercase hex digits.
+
+    """
+    digest = hashlib.sha256()
+    for source in sorted(Path(__file__).resolve().parent.glob('*.py')):
+        digest.update(source.name.encode() + b'\0' + source.read_bytes() + b'\0')
+    return digest.hexdigest()[:16]
 
 
 def _ns(trial: Trial, t: np.ndarray) -> np.ndarray:
@@ -279,6 +304,7 @@ def write_manifest(*, trials: Iterable[Trial | Mapping], out_dir: Path,
         Directory holding the trial bags.
     settings : mapping or None
         Generator settings stored under 'settings' (seed, conditions, rates, storage, ...).
+        The manifest also records :func:`simulator_fingerprint` under 'simulator'.
 
     Returns
     -------
@@ -291,6 +317,7 @@ def write_manifest(*, trials: Iterable[Trial | Mapping], out_dir: Path,
     data = {
         'format': 'contact_detector.sim.manifest',
         'version': MANIFEST_VERSION,
+        'simulator': simulator_fingerprint(),
         'settings': dict(settings or {}),
         'trials': records,
     }
@@ -365,7 +392,9 @@ def held_trials(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: float = 
     (dict or None, tuple of str)
         The manifest (None: ``out_dir`` has none) and what differs: empty when it holds these
         very trials and every bag it lists is there, else the keys of
-        :func:`differing_settings`, or ``'bags'`` when some are missing.
+        :func:`differing_settings`, with ``'simulator'`` when another simulator's code wrote
+        them (:func:`simulator_fingerprint`; a manifest from before the fingerprint has none),
+        or ``'bags'`` when some are missing.
 
     Raises
     ------
@@ -378,6 +407,8 @@ def held_trials(*, out_dir: Path, settings: Mapping, ft_rate_tolerance: float = 
     held = read_manifest(out_dir)
     other = differing_settings(held=held.get('settings') or {}, wanted=settings,
                                ft_rate_tolerance=ft_rate_tolerance)
+    if held.get('simulator') != simulator_fingerprint():
+        other = tuple(sorted((*other, 'simulator')))
     if other:
         return held, other
     storage = str(settings.get('storage', 'sqlite3'))

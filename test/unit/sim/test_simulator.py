@@ -24,7 +24,7 @@ from contact_detector.cli.simulate import main as simulate_main
 from contact_detector.errors import BagError, ConfigError
 from contact_detector.io.bags import (iter_messages, jazzy_typestore, read_audio, read_manifest,
                                       read_truth, read_wrench)
-from contact_detector.sim import sound_bank
+from contact_detector.sim import bag_writer, sound_bank
 from contact_detector.sim.bag_writer import differing_settings, write_trial_bag
 from contact_detector.sim.conditions import (CONDITION_SETS, FAMILY_SETS, get_condition,
                                              LATER_SETS, ORIGINAL_SETS, ranges_markdown,
@@ -459,6 +459,41 @@ def test_simulate_reuse_keeps_the_same_trials_and_refuses_others(tmp_path, capsy
     assert simulate_main([*args, '--reuse', '--overwrite', '--quiet']) == 0
     assert read_manifest(out)['settings']['seed'] == 3
 
+
+
+def test_reuse_refuses_trials_of_another_simulator_code(tmp_path, capsys):
+    # the manifest records the simulator's fingerprint: trials simulated before an edit to
+    # the simulator (or before the fingerprint existed) are not reused as if they were new
+    out = tmp_path / 'run'
+    args = [str(out), '--trials', '2', '--seed', '3', '--conditions', 'paper']
+    assert simulate_main([*args, '--quiet']) == 0
+    assert read_manifest(out)['simulator'] == bag_writer.simulator_fingerprint()
+    manifest = json.loads((out / 'manifest.json').read_text())
+    for held in ('0123456789abcdef', None):
+        if held is None:
+            manifest.pop('simulator')
+        else:
+            manifest['simulator'] = held
+        (out / 'manifest.json').write_text(json.dumps(manifest))
+        capsys.readouterr()
+        assert simulate_main([*args, '--reuse', '--quiet']) == 1
+        assert '(other simulator)' in capsys.readouterr().err
+        assert simulate_main([*args, '--reuse', '--overwrite', '--quiet']) == 0
+        assert read_manifest(out)['simulator'] == bag_writer.simulator_fingerprint()
+        manifest = json.loads((out / 'manifest.json').read_text())
+
+
+def test_the_simulator_fingerprint_follows_every_edit_of_its_code(tmp_path, monkeypatch):
+    sim = Path(bag_writer.__file__).resolve().parent
+    for source in sim.glob('*.py'):
+        shutil.copy(source, tmp_path / source.name)
+    fingerprint = bag_writer.simulator_fingerprint.__wrapped__
+    monkeypatch.setattr(bag_writer, '__file__', str(tmp_path / 'bag_writer.py'))
+    assert fingerprint() == bag_writer.simulator_fingerprint()
+    with open(tmp_path / 'loads.py', 'a') as handle:
+        handle.write('# an edit\n')
+    edited = fingerprint()
+    assert edited != bag_writer.simulator_fingerprint() and len(edited) == 16
 
 def test_settings_left_out_by_older_manifests_take_their_defaults():
     wanted = {'seed': 1, 'trials': 4, 'ft_rate': 100.0, 'tared': 'family', 'hits': None}

@@ -17,6 +17,7 @@
 import json
 
 from contact_detector.errors import BagError
+from contact_detector.sim.bag_writer import simulator_fingerprint
 from contact_detector.training.recipe import sim_parts, simulated_trials
 import pytest
 
@@ -58,7 +59,8 @@ def test_a_part_whose_bags_are_gone_is_refused(tmp_path):
     settings = sim_parts(n=8, seed=0, ft_rate=125.0, audio_rate=16000)['mixed']
     (tmp_path / 'mixed').mkdir()
     (tmp_path / 'mixed' / 'manifest.json').write_text(json.dumps(
-        {'settings': settings, 'trials': [{'bag': f'trial_{i:04d}'} for i in range(6, 8)]}))
+        {'simulator': simulator_fingerprint(), 'settings': settings,
+         'trials': [{'bag': f'trial_{i:04d}'} for i in range(6, 8)]}))
     with pytest.raises(BagError, match=r'holds other simulated trials \(other bags\)'):
         simulated_trials(sim_dir=tmp_path, n=8, seed=0, ft_rate=125.0, audio_rate=16000)
     assert sorted(p.name for p in tmp_path.iterdir()) == ['mixed']
