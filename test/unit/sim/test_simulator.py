@@ -460,7 +460,6 @@ def test_simulate_reuse_keeps_the_same_trials_and_refuses_others(tmp_path, capsy
     assert read_manifest(out)['settings']['seed'] == 3
 
 
-
 def test_reuse_refuses_trials_of_another_simulator_code(tmp_path, capsys):
     # the manifest records the simulator's fingerprint: trials simulated before an edit to
     # the simulator (or before the fingerprint existed) are not reused as if they were new
@@ -494,6 +493,7 @@ def test_the_simulator_fingerprint_follows_every_edit_of_its_code(tmp_path, monk
         handle.write('# an edit\n')
     edited = fingerprint()
     assert edited != bag_writer.simulator_fingerprint() and len(edited) == 16
+
 
 def test_settings_left_out_by_older_manifests_take_their_defaults():
     wanted = {'seed': 1, 'trials': 4, 'ft_rate': 100.0, 'tared': 'family', 'hits': None}
