@@ -55,8 +55,8 @@ from contact_detector.model.storage import load_bundle
 from contact_detector.training.protocol import LabelWindow
 from contact_detector.training.sweep import (decide_trial, FeatureSetting, p_contact,
                                              setting_columns)
-from generator_rules import set_frames, sets_parser
-from lofo_rules import print_rules, summarise, write_json
+from generator_rules import print_sets, set_frames, sets_parser
+from lofo_rules import write_json
 import numpy as np
 
 
@@ -216,12 +216,7 @@ def main(argv=None) -> int:
         for key in (folder.name, 'all'):
             for name, o in scored.items():
                 outcomes.setdefault(key, {}).setdefault(name, []).extend(o)
-    summary = {}
-    for set_name, by_rule in outcomes.items():
-        print(f'== {set_name}')
-        summary[set_name] = {name: summarise(outcomes=o, knocked=[])
-                             for name, o in by_rule.items()}
-        print_rules(summary[set_name], families=args.families)
+    summary = print_sets(outcomes, families=args.families)
     write_json(args.json, rules={'S': mm_bundle.decision_rule}, summary=summary,
                gates={name: {'floor': floor, 'window_s': window}
                       for name, floor, window in args.gate})

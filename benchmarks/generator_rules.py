@@ -138,6 +138,22 @@ def early_lines(*, outcomes: list, frames: list) -> List[str]:
     return lines
 
 
+def print_sets(outcomes: Dict[str, Dict[str, List]], *, families: bool) -> Dict[str, dict]:
+    """
+    Print each set's (and ``'all'``'s) rules as ``lofo_rules.py`` does; return the summaries.
+
+    ``outcomes`` maps a set's name to each rule's outcomes; the result maps it to each rule's
+    :func:`lofo_rules.summarise` (no trial is knocked on the hand in the air here).
+    """
+    summary = {}
+    for set_name, by_rule in outcomes.items():
+        print(f'== {set_name}')
+        summary[set_name] = {name: summarise(outcomes=o, knocked=[])
+                             for name, o in by_rule.items()}
+        print_rules(summary[set_name], families=families)
+    return summary
+
+
 def sets_parser(description: str) -> argparse.ArgumentParser:
     """Return a screen's parser with its ``sets``: folders of labelled recordings."""
     parser = argparse.ArgumentParser(description=description,
@@ -218,12 +234,7 @@ def main(argv=None) -> int:
         for i, row in enumerate(set_rows):
             for key in (set_name, 'all'):
                 outcomes[key][names[i % len(names)]] += row.outcomes
-    summary = {}
-    for set_name, by_rule in outcomes.items():
-        print(f'== {set_name}')
-        summary[set_name] = {name: summarise(outcomes=o, knocked=[])
-                             for name, o in by_rule.items()}
-        print_rules(summary[set_name], families=args.families)
+    summary = print_sets(outcomes, families=args.families)
     if args.early:
         print('== early releases of S')
         for set_name, frames in sets.items():

@@ -100,17 +100,23 @@ def test_a_generator_and_simulated_trials_train_together_from_one_labels_csv(tmp
     assert sum(training['exogenous_events'].values()) >= sum(len(m['impacts']) for m in manifest)
 
 
-def test_generator_rules_scores_the_model_as_evaluate_does_and_blames_the_events(
-        tmp_path, monkeypatch):
-    # benchmarks/generator_rules.py, the command behind docs/generalisation.md's early releases
+def _evaluated_b_set(tmp_path: Path, *, seed: int, detectors: tuple) -> tuple:
+    """Return generator B's two trials of hsr_side and tiago_mobile, and evaluate's report."""
     out = tmp_path / 'B'
     subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
-                    '--trials-per-family', '2', '--seed', '7', '--families',
+                    '--trials-per-family', '2', '--seed', str(seed), '--families',
                     'hsr_side,tiago_mobile', '--jobs', '1'], check=True, capture_output=True)
     report = tmp_path / 'report'
     assert evaluate_cli.main([str(out / 'hsr_side'), str(out / 'tiago_mobile'), '--labels',
-                              str(out / 'labels.csv'), '--detector', 'forest', '--report',
-                              str(report)]) == 0
+                              str(out / 'labels.csv'), '--report', str(report),
+                              *(a for d in detectors for a in ('--detector', d))]) == 0
+    return out, report
+
+
+def test_generator_rules_scores_the_model_as_evaluate_does_and_blames_the_events(
+        tmp_path, monkeypatch):
+    # benchmarks/generator_rules.py, the command behind docs/generalisation.md's early releases
+    out, report = _evaluated_b_set(tmp_path, seed=7, detectors=('forest',))
     # one hsr_side trial has a 47 ms gap in its F/T 0.3 s before the onset: the F/T window
     # restarts, and the frames the detector decides invalid there empty the rule's history
     expected = json.loads((report / 'metrics.json').read_text())['forest']['summary']['all']
@@ -206,14 +212,7 @@ def test_generator_ablation_decides_recordings_without_a_microphone_for_the_ft_o
 
 def test_generator_gate_with_an_open_gate_is_the_model_and_both_is_forest_both(tmp_path):
     # benchmarks/generator_gate.py, the screen of docs/decisions/2026-12-08-ft-only-gate.md
-    out = tmp_path / 'B'
-    subprocess.run([sys.executable, BENCHMARKS / 'independent_robots.py', out,
-                    '--trials-per-family', '2', '--seed', '13', '--families',
-                    'hsr_side,tiago_mobile', '--jobs', '1'], check=True, capture_output=True)
-    report = tmp_path / 'report'
-    assert evaluate_cli.main([str(out / 'hsr_side'), str(out / 'tiago_mobile'), '--labels',
-                              str(out / 'labels.csv'), '--detector', 'forest', '--detector',
-                              'forest-both', '--report', str(report)]) == 0
+    out, report = _evaluated_b_set(tmp_path, seed=13, detectors=('forest', 'forest-both'))
     metrics = json.loads((report / 'metrics.json').read_text())
     counts = tmp_path / 'gate.json'
     subprocess.run([sys.executable, BENCHMARKS / 'generator_gate.py', out, '--gate', 'open:0:0.1',
