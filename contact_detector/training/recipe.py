@@ -34,12 +34,12 @@ from contact_detector.evaluation.metrics import score_onsets, score_trial, summa
 from contact_detector.evaluation.truth import truth_for
 from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig, SHIFT_FEATURES)
-from contact_detector.io.bags import read_manifest
+from contact_detector.io.bags import MANIFEST_NAME, read_manifest
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
 from contact_detector.model.rule import DecisionRule
-from contact_detector.sim.bag_writer import held_trials, write_trials
+from contact_detector.sim.bag_writer import held_trials, simulator_fingerprint, write_trials
 from contact_detector.sim.conditions import resolve_conditions
 from contact_detector.sim.trial import simulate_trials
 from contact_detector.training.augmentation import trial_seed, WrenchAugmentation
@@ -308,6 +308,10 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
     ``sources['simulated']['parts']`` says, for each part of :func:`sim_parts`, its trials,
     seed, events and hits (``simulate``'s ``--events`` and ``--hits``; None: each family's
     cycle), families and exogenous events (counted like ``training.exogenous_events``).
+    ``sources['simulated']['simulator']`` and, for the folders of ``user`` bags that a
+    simulator manifest with a fingerprint describes, ``sources['recordings']['simulator']``
+    (folder name -> fingerprint) say which simulator code made the trials
+    (:func:`~contact_detector.sim.bag_writer.simulator_fingerprint`).
     """
     sources = {}
     if user:
@@ -319,6 +323,9 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
             'labels': (f'{labels_path.name} (--labels)' if len(rows) == len(user) else
                        f'{labels_path.name} (--labels) for {len(rows)}, {own} for the other '
                        f'{len(user) - len(rows)}') if labels_path else own}
+        simulators = _simulator_fingerprints(sorted({b.parent for b in user}))
+        if simulators:
+            sources['recordings']['simulator'] = simulators
     if sim is not None and sim.bags:
         first = next(iter(sim.parts.values()))
         parts = {}
@@ -335,8 +342,25 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
             'seed': first['seed'], 'ft_rate': first['ft_rate'],
             'audio_rate': first['audio_rate'], 'parts': parts,
             'labels': 'simulator truth (/contact_truth)',
+            # simulated now or reused: held_trials reuses only trials of this very code
+            'simulator': simulator_fingerprint(),
             'kept_in': str(sim_dir) if kept else 'a temporary directory (deleted)'}
     return sources
+
+
+def _simulator_fingerprints(folders: Sequence[Path]) -> Dict[str, str]:
+    """Return folder name -> the simulator fingerprint its manifest records, where it has one."""
+    out = {}
+    for folder in folders:
+        if not (folder / MANIFEST_NAME).is_file():
+            continue
+        try:
+            fingerprint = read_manifest(folder).get('simulator')
+        except BagError:
+            continue        # not a simulator's folder (train reports a bad manifest itself)
+        if isinstance(fingerprint, str):
+            out[folder.name] = fingerprint
+    return out
 
 
 def event_metrics(*, bundle: ModelBundle, bags: Sequence[Path], spec: StreamSpec,

@@ -27,6 +27,7 @@ from contact_detector.cli import train as train_cli
 from contact_detector.io.bags import read_wrench
 from contact_detector.io.discovery import discover_streams
 from contact_detector.model.storage import load_bundle
+from contact_detector.sim.bag_writer import simulator_fingerprint
 import pytest
 
 pytestmark = pytest.mark.slow   # runs the generator's 8 kHz mechanics
@@ -97,6 +98,8 @@ def test_a_generator_and_simulated_trials_train_together_from_one_labels_csv(tmp
                            '--no-events', '--event-weight', '3', '--out', str(model)]) == 0
     training = load_bundle(path=model).training
     assert training['sources']['recordings']['count'] == 5
+    # which simulator code made the simulated folder; the generator's folder has no fingerprint
+    assert training['sources']['recordings']['simulator'] == {'sim': simulator_fingerprint()}
     assert sum(training['exogenous_events'].values()) >= sum(len(m['impacts']) for m in manifest)
 
 

@@ -32,7 +32,7 @@ from contact_detector.io.bags import read_wrench
 from contact_detector.io.discovery import discover_streams
 from contact_detector.model.storage import load_bundle
 from contact_detector.sim import simulate_trials
-from contact_detector.sim.bag_writer import write_trial_bag
+from contact_detector.sim.bag_writer import simulator_fingerprint, write_trial_bag
 import numpy as np
 import pytest
 from rosbags.rosbag1 import Reader
@@ -174,6 +174,7 @@ def test_train_on_recordings_mixed_with_simulated_trials(recordings, tmp_path, c
     assert simulated['trials'] == 8 and simulated['kept_in'] == str(sim)
     assert len(simulated['families']) == 8        # wide: the parts continue one family cycle
     assert simulated['ft_rate'] == 125.0
+    assert simulated['simulator'] == simulator_fingerprint()   # the code that made them
     card = json.loads(model.with_name('mine.card.json').read_text())
     assert card['training']['sources'] == sources
     assert load_bundle(path=model).training['trials'] == 11
