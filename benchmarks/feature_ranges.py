@@ -15,7 +15,7 @@
 """
 Where your recordings' features sit against the simulated trials a model is trained on.
 
-    .venv/bin/python benchmarks/feature_ranges.py --reference data/train RECORDINGS... \
+    .venv/bin/python benchmarks/feature_ranges.py RECORDINGS... --reference data/train \
         [--labels LABELS.csv] [--model M] [--reference-trials 96] [--augmented]
 
 When a model misses the contacts of your robot, this says which features look unlike the
@@ -55,9 +55,10 @@ WINDOWS = {'before': (-1.5, -0.3), 'contact': (0.05, 0.3)}
 def window_frames(*, bags: Sequence[Path], config: FeatureConfig,
                   onsets: Dict[Path, List[float]],
                   augmentation: Optional[WrenchAugmentation] = None,
-                  seed: int = 0) -> Tuple[Dict[str, np.ndarray], List[str]]:
+                  seed: int = 0, windows: Optional[Dict[str, Tuple[float, float]]] = None
+                  ) -> Tuple[Dict[str, np.ndarray], List[str]]:
     """
-    Return the feature frames of the bags in each window of :data:`WINDOWS`.
+    Return the feature frames of the bags in each window of ``windows`` (:data:`WINDOWS`).
 
     Parameters
     ----------
@@ -72,6 +73,9 @@ def window_frames(*, bags: Sequence[Path], config: FeatureConfig,
         None = as recorded.
     seed : int
         The training seed the draws follow.
+    windows : dict or None
+        Window name -> (start, end), s relative to the onset, frames with ``start <= t - onset
+        < end``; None: :data:`WINDOWS`.
 
     Returns
     -------
@@ -82,7 +86,8 @@ def window_frames(*, bags: Sequence[Path], config: FeatureConfig,
         The feature names, in column order.
 
     """
-    out: Dict[str, List[np.ndarray]] = {name: [] for name in WINDOWS}
+    windows = WINDOWS if windows is None else windows
+    out: Dict[str, List[np.ndarray]] = {name: [] for name in windows}
     names: List[str] = []
     for bag in bags:
         streams = discover_streams(bag, allow_no_audio=not config.audio)
@@ -94,7 +99,7 @@ def window_frames(*, bags: Sequence[Path], config: FeatureConfig,
         names = list(config.feature_names)
         first = min(data.onsets)
         dt = data.t - first
-        for name, (start, end) in WINDOWS.items():
+        for name, (start, end) in windows.items():
             out[name].append(data.x[(dt >= start) & (dt < end)])
     width = len(names)
     return ({name: (np.concatenate(frames) if frames else np.empty((0, width)))
@@ -141,9 +146,9 @@ def range_table(*, reference: Dict[str, np.ndarray], recordings: Dict[str, np.nd
     return '\n'.join(lines)
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Print the table; return the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+def reference_parser(description: str, *, reference_trials: int) -> argparse.ArgumentParser:
+    """Return a parser of recordings, ``--reference``, ``--labels``, ``--model`` and a count."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument('recordings', nargs='+', type=Path, help='folders of bags, or bags')
     parser.add_argument('--reference', nargs='+', type=Path, required=True,
                         help='folders of simulated trials (e.g. the training set)')
@@ -151,10 +156,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="CSV of the recordings' onsets (contact-detector label writes "
                              'one); bags it does not name use their own truth')
     parser.add_argument('--model', type=Path, default=None,
-                        help='model whose features to compute (default: the shipped '
+                        help='the model whose features to compute (default: the shipped '
                              'multimodal model)')
-    parser.add_argument('--reference-trials', type=int, default=96,
-                        help='use the first N reference bags (default 96)')
+    parser.add_argument('--reference-trials', type=int, default=reference_trials,
+                        help=f'use the first N reference bags (default {reference_trials})')
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Print the table; return the exit status."""
+    parser = reference_parser(__doc__.split('\n\n')[0], reference_trials=96)
     parser.add_argument('--augmented', action='store_true',
                         help="vary the reference trials' wrenches as the model's training did")
     args = parser.parse_args(argv)

@@ -60,17 +60,69 @@ def test_trials_like_the_reference_sit_inside_its_range(sets):
     assert below <= 30 and above <= 30
 
 
-def test_a_window_that_is_not_the_contact_is_flagged(sets, tmp_path):
-    # labelled 1 s early, the recordings' "contact" frames are the approach: their load change
-    # is far below any simulated contact's, which is what the table is there to show
-    manifest = json.loads((sets / 'recordings' / 'manifest.json').read_text())
-    labels = tmp_path / 'early.csv'
+def _labelled_early(folder: Path, labels: Path) -> Path:
+    """Write a labels CSV that puts every simulated trial's onset 1 s before its true one."""
+    manifest = json.loads((folder / 'manifest.json').read_text())
     with labels.open('w', newline='') as f:
         out = csv.writer(f)
         out.writerow(['bag', 'onset_start', 'onset_end'])
         for trial in manifest['trials']:
             out.writerow([trial['name'], trial['onset_t'] - 1.0, trial['onset_t'] - 1.0])
+    return labels
+
+
+def test_a_window_that_is_not_the_contact_is_flagged(sets, tmp_path):
+    # labelled 1 s early, the recordings' "contact" frames are the approach: their load change
+    # is far below any simulated contact's, which is what the table is there to show
+    labels = _labelled_early(sets / 'recordings', tmp_path / 'early.csv')
     rows = _table(str(sets / 'recordings'), '--reference', str(sets / 'reference'),
                   '--labels', str(labels), '--model', str(default_ft_model_path()),
                   '--augmented')
     assert rows['force_shift'][0] >= 80
+
+
+SWAP = SCRIPT.with_name('modality_swap.py')
+
+
+def _swap_table(*args: str) -> dict:
+    """Return modality_swap.py's rows: label -> [(mean P, share %), ...] per window."""
+    done = subprocess.run([sys.executable, str(SWAP), *args], capture_output=True, text=True,
+                          check=True)
+    rows = {}
+    for line in done.stdout.splitlines():
+        cells = [c.strip() for c in line.strip('|').split('|')]
+        if line.startswith('| ') and cells[0] not in ('frames', '---'):
+            rows[cells[0]] = [(float(c.split(',')[0]), float(c.split(',')[1].split('%')[0]))
+                              for c in cells[1:]]
+    return rows
+
+
+def test_modality_swap_of_the_reference_itself_changes_nothing_it_scores(sets):
+    rows = _swap_table(str(sets / 'reference'), '--reference', str(sets / 'reference'))
+    assert list(rows) == ['reference', 'recordings', 'recordings, reference audio',
+                          'recordings, reference F/T']
+    assert rows['recordings'] == rows['reference']      # the same frames, scored alike
+    assert all(0.0 <= mean <= 1.0 for r in rows.values() for mean, _ in r)
+
+
+def test_modality_swap_finds_the_contact_in_the_swapped_force_torque(sets, tmp_path):
+    # labelled 1 s early, the recordings' frames after the "onset" are the approach: the F/T-only
+    # model is sure there is no contact, until the reference contacts' F/T features are swapped in
+    labels = _labelled_early(sets / 'recordings', tmp_path / 'early.csv')
+    rows = _swap_table(str(sets / 'recordings'), '--reference', str(sets / 'reference'),
+                       '--labels', str(labels), '--model', str(default_ft_model_path()))
+    assert list(rows) == ['reference', 'recordings', 'recordings, reference F/T']  # no audio
+    late = {label: r[2][0] for label, r in rows.items()}     # mean P 60-120 ms
+    assert late['recordings'] < 0.2 < late['reference'] - 0.3
+    assert abs(late['recordings, reference F/T'] - late['reference']) < 0.2
+
+
+def test_swapped_takes_only_the_named_columns_from_the_reference(monkeypatch):
+    monkeypatch.syspath_prepend(str(SCRIPT.parent))
+    import modality_swap
+    import numpy as np
+    frames = np.zeros((4, 3))
+    reference = np.array([[1.0, 2.0, 3.0]])
+    out = modality_swap.swapped(frames=frames, reference=reference, columns=[0, 2],
+                                rng=np.random.default_rng(0))
+    assert out.tolist() == [[1.0, 0.0, 3.0]] * 4 and not frames.any()
