@@ -171,15 +171,22 @@ def score_sets(*, pairs: Sequence[tuple], gates: Sequence[Tuple[str, float, floa
     return out
 
 
-def model_p(*, bundle, frames: Sequence[object]) -> Tuple[List[np.ndarray], tuple]:
-    """Return a shipped model's P(contact) per frame of every recording, and the column names."""
-    config = bundle.feature_config.with_rule_columns()
-    setting = FeatureSetting('shipped', config, LabelWindow(**bundle.label_window),
-                             columns=bundle.feature_names)
-    cols = setting_columns(setting)
-    forest = bundle.compile()
-    return ([p_contact(forest, f.x[:, cols]) if f.x.shape[0] else np.zeros(0) for f in frames],
-            config.feature_names)
+class ShippedModel:
+    """A shipped model compiled once: its forest, its frames' column names and its columns."""
+
+    def __init__(self, bundle) -> None:
+        self.bundle = bundle
+        self.config = bundle.feature_config.with_rule_columns()
+        self.names = self.config.feature_names
+        self.cols = setting_columns(FeatureSetting(
+            'shipped', self.config, LabelWindow(**bundle.label_window),
+            columns=bundle.feature_names))
+        self.forest = bundle.compile()
+
+    def p(self, frames: Sequence[object]) -> List[np.ndarray]:
+        """Return P(contact) per frame of every recording."""
+        return [p_contact(self.forest, f.x[:, self.cols]) if f.x.shape[0] else np.zeros(0)
+                for f in frames]
 
 
 def main(argv=None) -> int:
@@ -196,28 +203,25 @@ def main(argv=None) -> int:
     parser.add_argument('--json', type=Path, default=None,
                         help='the counts, as JSON')
     args = parser.parse_args(argv)
-    mm_bundle = load_bundle(path=default_model_path())
-    ft_bundle = load_bundle(path=default_ft_model_path())
+    mm = ShippedModel(load_bundle(path=default_model_path()))
+    ft = ShippedModel(load_bundle(path=default_ft_model_path()))
     outcomes: Dict[str, Dict[str, List[Outcome]]] = {}
     for folder in args.sets:
-        mm_frames = set_frames(folder=folder, config=mm_bundle.feature_config.with_rule_columns(),
-                               multimodal=True, jobs=args.jobs)
+        mm_frames = set_frames(folder=folder, config=mm.config, multimodal=True, jobs=args.jobs)
         ft_by_name = {g.truth.name: g for g in set_frames(
-            folder=folder, config=ft_bundle.feature_config.with_rule_columns(),
-            multimodal=False, jobs=args.jobs)}
+            folder=folder, config=ft.config, multimodal=False, jobs=args.jobs)}
         ft_frames = [ft_by_name[f.truth.name] for f in mm_frames]
         print(f'{folder.name}: {len(mm_frames)} recordings with a microphone', file=sys.stderr,
               flush=True)
-        pm, mm_names = model_p(bundle=mm_bundle, frames=mm_frames)
-        pf, ft_names = model_p(bundle=ft_bundle, frames=ft_frames)
-        scored = score_sets(pairs=list(zip(mm_frames, pm, ft_frames, pf)), gates=args.gate,
-                            both=args.both, fast_only=args.fast_only, mm=(mm_bundle, mm_names),
-                            ft=(ft_bundle, ft_names))
+        scored = score_sets(pairs=list(zip(mm_frames, mm.p(mm_frames), ft_frames,
+                                           ft.p(ft_frames))),
+                            gates=args.gate, both=args.both, fast_only=args.fast_only,
+                            mm=(mm.bundle, mm.names), ft=(ft.bundle, ft.names))
         for key in (folder.name, 'all'):
             for name, o in scored.items():
                 outcomes.setdefault(key, {}).setdefault(name, []).extend(o)
     summary = print_sets(outcomes, families=args.families)
-    write_json(args.json, rules={'S': mm_bundle.decision_rule}, summary=summary,
+    write_json(args.json, rules={'S': mm.bundle.decision_rule}, summary=summary,
                gates={name: {'floor': floor, 'window_s': window}
                       for name, floor, window in args.gate})
     return 0

@@ -784,8 +784,3 @@ def manifest_entry(bag: str | Path, *,
     names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
     hits = [index[n] for n in names if n in index]
     return min(hits, key=lambda hit: hit[0])[1] if hits else None
-    names = {bag.name, bag.stem} if bag.suffix == '.bag' else {bag.name}
-    for trial in read_manifest(file)['trials']:
-        if trial.get('bag') in names or trial.get('name') in names:
-            return trial
-    return None
