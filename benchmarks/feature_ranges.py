@@ -152,9 +152,10 @@ def reference_parser(description: str, *, reference_trials: int) -> argparse.Arg
     parser.add_argument('recordings', nargs='+', type=Path, help='folders of bags, or bags')
     parser.add_argument('--reference', nargs='+', type=Path, required=True,
                         help='folders of simulated trials (e.g. the training set)')
-    parser.add_argument('--labels', type=Path, default=None,
+    parser.add_argument('--labels', type=Path, action='append', default=None,
                         help="CSV of the recordings' onsets (contact-detector label writes "
-                             'one); bags it does not name use their own truth')
+                             'one; repeat it for several); bags no CSV names use their own '
+                             'truth')
     parser.add_argument('--model', type=Path, default=None,
                         help='the model whose features to compute (default: the shipped '
                              'multimodal model)')
@@ -183,7 +184,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     bags = find_bags(args.recordings)
     onsets: Dict[Path, List[float]] = {}
     if args.labels is not None:
-        labels = labels_for(csv_path=args.labels, bags=bags)
+        labels = labels_for(csv_paths=args.labels, bags=bags)
         onsets = labels.onsets
         bags = [b for b in bags if b not in labels.left_out]
     reference, names = window_frames(bags=reference_bags, config=config, onsets={},

@@ -111,7 +111,7 @@ def recording_frames(*, bag: Path, onset: float, name: str, family: str, events:
 def set_frames(*, folder: Path, config, multimodal: bool, jobs: int) -> List[object]:
     """Return the frames of every labelled recording of one set, in the order of its bags."""
     bags = find_bags(sorted(d for d in folder.iterdir() if d.is_dir()))
-    onsets = labels_for(csv_path=folder / 'labels.csv', bags=bags).onsets
+    onsets = labels_for(csv_paths=[folder / 'labels.csv'], bags=bags).onsets
     events = generator_events(folder)
     tasks = [(bag, onsets[bag][0], bag.relative_to(folder).as_posix()) for bag in bags
              if onsets.get(bag)]

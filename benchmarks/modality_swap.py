@@ -128,7 +128,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         bags = find_bags(args.recordings)
         onsets = {}
         if args.labels is not None:
-            labels = labels_for(csv_path=args.labels, bags=bags)
+            labels = labels_for(csv_paths=args.labels, bags=bags)
             onsets = labels.onsets
             bags = [b for b in bags if b not in labels.left_out]
         reference, names = window_frames(

@@ -79,9 +79,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              'model)')
     parser.add_argument('--params', type=Path, default=None)
     add_stream_arguments(parser)
-    parser.add_argument('--labels', type=Path, default=None,
+    parser.add_argument('--labels', type=Path, action='append', default=None,
                         help='CSV of bag,onset_start,onset_end rows (the truth; several rows '
-                             'for a recording with several contacts)')
+                             'for a recording with several contacts); repeat it for recordings '
+                             'whose rows are in several CSVs')
     parser.add_argument('--report', type=Path, default=None)
     args = parser.parse_args(argv)
     chosen: List[str] = args.detector or ['forest']
@@ -114,12 +115,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                   allow_no_audio=make.decides_without_audio))
         labels = None
         if args.labels:
-            labelled = labels_for(csv_path=args.labels, bags=list(found))
+            labelled = labels_for(csv_paths=args.labels, bags=list(found))
             labels = labelled.onsets
             found = {b: s for b, s in found.items() if b not in labelled.left_out}
             if labelled.own_truth:
+                csvs = ', '.join(map(str, args.labels))
                 print(f'contact-detector evaluate: {len(labelled.own_truth)} bags without a row '
-                      f'in {args.labels} are scored against their own truth (manifest.json or '
+                      f'in {csvs} are scored against their own truth (manifest.json or '
                       '/contact_truth)', file=sys.stderr)
         results = evaluate(bags=list(found), detectors=detectors, make_forest=make,
                            spec=StreamSpec(**stream), audio_rate=probe.settings.audio_rate,

@@ -16,7 +16,7 @@
 ``contact-detector train``: train the contact forest the paper's way and write its report.
 
     contact-detector train BAG_OR_DIR... --out models/contact_forest.npz --report DIR
-                           [--labels labels.csv] [--with-sim N [--sim-dir DIR]]
+                           [--labels labels.csv]... [--with-sim N [--sim-dir DIR]]
 
 Labels come from each bag's ``/contact_truth`` (or ``--labels FILE.csv`` with rows
 ``bag,onset_start,onset_end``, several rows for a recording with several contacts; a bag the
@@ -68,9 +68,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='model file; its suffix (.npz, .joblib, .skops) picks the format '
                              'unless --format is given (default models/contact_forest.npz)')
     parser.add_argument('--report', type=Path, default=None, help='report directory')
-    parser.add_argument('--labels', type=Path, default=None,
+    parser.add_argument('--labels', type=Path, action='append', default=None,
                         help='CSV of bag,onset_start,onset_end (instead of /contact_truth); '
-                             'several rows for a recording with several contacts')
+                             'several rows for a recording with several contacts; repeat it '
+                             'for recordings whose rows are in several CSVs')
     parser.add_argument('--with-sim', type=int, default=0, metavar='N',
                         help='add N simulated trials of the wide condition sets (default 0): '
                              "N - round(N/5) with each family's own exogenous events (seed "
@@ -134,13 +135,14 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
     user_bags = list(found)
     csv_onsets = None
     if args.labels:
-        labelled = labels_for(csv_path=args.labels, bags=user_bags)
+        labelled = labels_for(csv_paths=args.labels, bags=user_bags)
         csv_onsets = labelled.onsets
         user_bags = [b for b in user_bags if b not in labelled.left_out]
         found = {b: found[b] for b in user_bags}     # bags label could not label are left out
         if labelled.own_truth:
+            csvs = ', '.join(map(str, args.labels))
             print(f'contact-detector train: {len(labelled.own_truth)} bags without a row in '
-                  f'{args.labels} are labelled by their own truth (/contact_truth)')
+                  f'{csvs} are labelled by their own truth (/contact_truth)')
     sim = None
     if args.with_sim:
         ft_rate = float(np.round(np.median([s.wrench_rate for s in found.values()])))
@@ -166,8 +168,8 @@ def _train(args: argparse.Namespace, *, sim_dir: Optional[Path]) -> int:
             audio_coding=None), params={}, prog='contact-detector train'))
     bags = list(found)
     manifest = conditions_of(bags)
-    sources = training_sources(user=user_bags, csv_onsets=csv_onsets, labels_path=args.labels,
-                               sim=sim, sim_dir=sim_dir,
+    sources = training_sources(user=user_bags, csv_onsets=csv_onsets,
+                               labels_paths=args.labels or (), sim=sim, sim_dir=sim_dir,
                                kept=args.sim_dir is not None, manifest=manifest)
     bars = {}
 

@@ -355,7 +355,7 @@ def unlabelled_bags(path: Path) -> Dict[str, str]:
 @dataclass(frozen=True)
 class CsvLabels:
     """
-    What a labels CSV says of the bags of one command (:func:`labels_for`).
+    What the labels CSVs say of the bags of one command (:func:`labels_for`).
 
     Attributes
     ----------
@@ -375,21 +375,23 @@ class CsvLabels:
     own_truth: List[Path]
 
 
-def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
+def labels_for(*, csv_paths: Sequence[Path], bags: Sequence[Path]) -> CsvLabels:
     """
-    Match a labels CSV to the bags of a command (``train --labels``, ``evaluate --labels``).
+    Match labels CSVs to the bags of a command (``train --labels``, ``evaluate --labels``).
 
-    A bag no row names keeps the truth it carries, as without ``--labels`` (simulated trials
-    beside labelled recordings); for that only the topic index and the manifest are read. A bag
-    whose row has no onset is left out (:func:`read_labels_csv` has warned about it). An onset
-    outside the time its bag was recorded (its index's first to last receive time) is kept
-    with a ``UserWarning`` naming its line: the onsets are in the time of the header stamps,
-    which may run on another clock.
+    Each CSV is matched on its own (:func:`match_labels`: a row's path is relative to its own
+    CSV's folder), so recordings of several sessions keep the CSV ``label`` wrote beside each;
+    a bag that rows of two CSVs name is an error. A bag no row names keeps the truth it
+    carries, as without ``--labels`` (simulated trials beside labelled recordings); for that
+    only the topic index and the manifest are read. A bag whose row has no onset is left out
+    (:func:`read_labels_csv` has warned about it). An onset outside the time its bag was
+    recorded (its index's first to last receive time) is kept with a ``UserWarning`` naming
+    its line: the onsets are in the time of the header stamps, which may run on another clock.
 
     Parameters
     ----------
-    csv_path : Path
-        The CSV file.
+    csv_paths : sequence of Path
+        The CSV files, at least one.
     bags : sequence of Path
         The bags of the command.
 
@@ -401,27 +403,42 @@ def labels_for(*, csv_path: Path, bags: Sequence[Path]) -> CsvLabels:
     ------
     BagError
         A bag has neither a row nor a truth of its own (the message names them and how to add
-        their rows), no bag is left, or :func:`read_labels_csv` or :func:`match_labels`
-        refuses a row.
+        their rows), two CSVs name one bag, no bag is left, or :func:`read_labels_csv` or
+        :func:`match_labels` refuses a row.
 
     """
-    rows = match_labels(rows=_onset_rows(path=csv_path), bags=bags, csv_path=csv_path)
-    _warn_outside(rows=rows, csv_path=csv_path)
-    onsets = {bag: [onset for onset, _line in found] for bag, found in rows.items()}
-    skipped = match_labels(rows=unlabelled_bags(csv_path), bags=bags, csv_path=csv_path)
+    csv_paths = list(csv_paths)
+    if not csv_paths:
+        raise BagError('no labels CSV given')
+    named = ' and '.join(str(p) for p in csv_paths)
+    onsets: Dict[Path, List[float]] = {}
+    skipped = set()
+    source: Dict[Path, Path] = {}      # bag -> the CSV that names it
+    for csv_path in csv_paths:
+        rows = match_labels(rows=_onset_rows(path=csv_path), bags=bags, csv_path=csv_path)
+        _warn_outside(rows=rows, csv_path=csv_path)
+        without = match_labels(rows=unlabelled_bags(csv_path), bags=bags, csv_path=csv_path)
+        for bag in {**rows, **without}:
+            if bag in source:
+                raise BagError(f'{source[bag]} and {csv_path} both name {bag}: give each bag '
+                               'the rows of one CSV')
+            source[bag] = csv_path
+        onsets.update({bag: [onset for onset, _line in found] for bag, found in rows.items()})
+        skipped.update(without)
     left_out = [b for b in bags if b not in onsets and b in skipped]
     kept = [b for b in bags if b not in left_out]
     if not kept:
-        raise BagError(f'{csv_path} gives no onset for any of the bags given')
+        raise BagError(f'{named} {"gives" if len(csv_paths) == 1 else "give"} no onset for any '
+                       'of the bags given')
     # the topic index first: a simulated bag always has the topic, and manifest_entry parses
     # the folder's whole manifest for each bag it is asked about
     missing = [str(b) for b in kept if b not in onsets and TRUTH_TOPIC not in topic_types(b)
                and manifest_entry(b) is None]
     if missing:
-        raise BagError(f'{csv_path} has no onset for {", ".join(missing[:5])}'
-                       + (' ...' if len(missing) > 5 else '') + ', and they carry no '
-                       '/contact_truth or manifest.json entry: add their rows '
-                       '(contact-detector label proposes them)')
+        raise BagError(f'{named} {"has" if len(csv_paths) == 1 else "have"} no onset for '
+                       f'{", ".join(missing[:5])}' + (' ...' if len(missing) > 5 else '')
+                       + ', and they carry no /contact_truth or manifest.json entry: add their '
+                       'rows (contact-detector label proposes them)')
     return CsvLabels(onsets=onsets, left_out=left_out,
                      own_truth=[b for b in kept if b not in onsets])
 

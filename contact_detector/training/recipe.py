@@ -34,7 +34,7 @@ from contact_detector.evaluation.metrics import score_onsets, score_trial, summa
 from contact_detector.evaluation.truth import truth_for
 from contact_detector.features.config import (CARRIED_FEATURES, FEATURE_SCHEMA_VERSION,
                                               FeatureConfig, SHIFT_FEATURES)
-from contact_detector.io.bags import MANIFEST_NAME, read_manifest
+from contact_detector.io.bags import MANIFEST_NAME, read_manifest, recording_names
 from contact_detector.io.discovery import Streams
 from contact_detector.io.sensor_stream import load_events, StreamSpec
 from contact_detector.model.bundle import ModelBundle, runtime_versions
@@ -300,7 +300,7 @@ def _trial_names(*, bags: Sequence[Path], user: set) -> list:
 
 
 def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
-                     labels_path: Optional[Path], sim: Optional[SimulatedSet],
+                     labels_paths: Sequence[Path], sim: Optional[SimulatedSet],
                      sim_dir: Optional[Path], kept: bool, manifest: dict) -> dict:
     """
     Return what the model was trained on, for the model card (``training.sources``).
@@ -318,11 +318,13 @@ def training_sources(*, user: Sequence[Path], csv_onsets: Optional[dict],
         rows = [b for b in user if b in (csv_onsets or {})]
         contacts = sum(len(csv_onsets[b]) for b in rows) + len(user) - len(rows)
         own = 'the /contact_truth topic or the simulator manifest of each bag'
+        # each CSV by as much of its path as tells it apart (one per session: day1/labels.csv)
+        csvs = ', '.join(recording_names(list(labels_paths)).values())
         sources['recordings'] = {
             'count': len(user), 'contacts': contacts, 'bags': sorted(b.name for b in user),
-            'labels': (f'{labels_path.name} (--labels)' if len(rows) == len(user) else
-                       f'{labels_path.name} (--labels) for {len(rows)}, {own} for the other '
-                       f'{len(user) - len(rows)}') if labels_path else own}
+            'labels': (f'{csvs} (--labels)' if len(rows) == len(user) else
+                       f'{csvs} (--labels) for {len(rows)}, {own} for the other '
+                       f'{len(user) - len(rows)}') if labels_paths else own}
         simulators = _simulator_fingerprints(sorted({b.parent for b in user}))
         if simulators:
             sources['recordings']['simulator'] = simulators

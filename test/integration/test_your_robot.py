@@ -134,6 +134,19 @@ def test_bags_that_share_a_name_are_labelled_and_reported_apart(recordings, tmp_
     bare = write_labels(tmp_path / 'bare.csv', {bag: [onset]})
     assert evaluate_cli.main([*days, '--labels', str(bare)]) == 1
     assert f"'{bag}' could be any of 2 bags" in capsys.readouterr().err
+    # Each day's own CSV beside its bags (as `label` writes one per session), bare names and
+    # all: every row is read relative to its own CSV, so the days keep their onsets apart.
+    own = [write_labels(tmp_path / day / 'labels.csv', {bag: [t]})
+           for day, t in (('day1', onset), ('day2', onset + 3.0))]
+    assert evaluate_cli.main([*days, '--labels', str(own[0]), '--labels', str(own[1]),
+                              '--report', str(tmp_path / 'own')]) == 0
+    assert {o['name']: o['verdict'] for o in json.loads(
+        (tmp_path / 'own' / 'trials.json').read_text())['forest']} == verdicts
+    # Two CSVs that both name one bag are refused, naming both, rather than one chosen.
+    capsys.readouterr()
+    assert evaluate_cli.main([*days, '--labels', str(labels), '--labels', str(own[1])]) == 1
+    err = capsys.readouterr().err
+    assert f'{labels} and {own[1]} both name' in err and 'Traceback' not in err
 
 
 def test_evaluate_scores_every_contact_of_a_recording(recordings, tmp_path, capsys):

@@ -21,6 +21,7 @@ from contact_detector.errors import BagError
 from contact_detector.evaluation.metrics import LATE_S
 from contact_detector.io.bags import jazzy_typestore, recording_names, TRUTH_TOPIC
 from contact_detector.training.protocol import labels_for, match_labels, read_labels_csv
+from contact_detector.training.recipe import training_sources
 import pytest
 from rosbags.rosbag2 import Writer
 
@@ -66,6 +67,28 @@ def test_a_row_that_could_name_several_bags_or_a_bag_named_twice_is_an_error(day
                      csv_path=root / 'labels.csv')
 
 
+def test_each_csv_of_several_names_the_bags_relative_to_its_own_folder(days):
+    root, bags = days
+    # one CSV per session, beside its bags, naming them as `label` does: by their own names
+    first = root / 'rec' / 'day1' / 'labels.csv'
+    second = root / 'rec' / 'day2' / 'labels.csv'
+    first.parent.mkdir(parents=True)
+    second.parent.mkdir(parents=True)
+    _csv(first, 'place_0.bag,10.0,10.1', 'place_1.bag,11.0,11.1')
+    _csv(second, 'place_0.bag,20.0,20.1', 'place_1.bag,,,no contact', 'only_here.bag,22.0,22.1')
+    with pytest.warns(UserWarning, match='place_1.bag has no onset'):
+        labels = labels_for(csv_paths=[first, second], bags=bags)
+    assert labels.onsets == {bags[0]: [10.0], bags[1]: [11.0], bags[2]: [20.0], bags[4]: [22.0]}
+    assert labels.left_out == [bags[3]] and labels.own_truth == []
+    # a bag two CSVs name is an error naming both, not a silent choice of one
+    both = _csv(root / 'labels.csv', 'rec/day2/only_here.bag,30.0,30.1')
+    with pytest.raises(BagError, match=re.escape(f'{second} and {both} both name {bags[4]}')), \
+            pytest.warns(UserWarning, match='place_1.bag has no onset'):
+        labels_for(csv_paths=[first, second, both], bags=bags)
+    with pytest.raises(BagError, match='no labels CSV given'):
+        labels_for(csv_paths=[], bags=bags)
+
+
 # --- labels that cannot be right (docs: contact-detector label, evaluate --labels) -----------
 
 
@@ -84,7 +107,7 @@ def test_a_labels_file_that_does_not_read_is_a_bag_error_naming_it(tmp_path, con
     # the error evaluate and train print as one line (a FileNotFoundError or a
     # UnicodeDecodeError would be a traceback)
     for read in (lambda: read_labels_csv(csv),
-                 lambda: labels_for(csv_path=csv, bags=[tmp_path / 'trial_0000'])):
+                 lambda: labels_for(csv_paths=[csv], bags=[tmp_path / 'trial_0000'])):
         with pytest.raises(BagError, match=f'cannot read labels {re.escape(str(csv))}: '):
             read()
 
@@ -107,7 +130,7 @@ def test_rows_of_one_bag_closer_than_the_late_window_are_refused_naming_both(tmp
     with pytest.raises(BagError, match=re.escape(f'{csv}:2 and line 4: ') + '.* of a are'):
         read_labels_csv(csv)
     with pytest.raises(BagError, match=re.escape(f'{csv}:2 and line 4: ')):
-        labels_for(csv_path=csv, bags=[tmp_path / 'a', tmp_path / 'b'])
+        labels_for(csv_paths=[csv], bags=[tmp_path / 'a', tmp_path / 'b'])
 
 
 def test_rows_of_one_bag_far_enough_apart_are_several_contacts(tmp_path):
@@ -117,7 +140,7 @@ def test_rows_of_one_bag_far_enough_apart_are_several_contacts(tmp_path):
     # bags that are no bags here: nothing to compare the onsets with, no warning
     with warnings.catch_warnings():
         warnings.simplefilter('error')
-        labels = labels_for(csv_path=csv, bags=[tmp_path / 'a', tmp_path / 'b'])
+        labels = labels_for(csv_paths=[csv], bags=[tmp_path / 'a', tmp_path / 'b'])
     assert labels.onsets == {tmp_path / 'a': [13.0, 10.0, 10.0 + LATE_S],
                              tmp_path / 'b': [10.0]}
 
@@ -139,11 +162,22 @@ def test_an_onset_outside_the_recording_is_kept_with_a_warning_naming_its_line(t
     # seconds from the start of the recording instead of bag time: a usual slip
     csv = _csv(tmp_path / 'labels.csv', 'a,1005.0,1005.1', 'b,5.0,5.1')
     with pytest.warns(UserWarning, match=re.escape(f'{csv}:3: 5.0 (recorded 2000.000 to ')):
-        labels = labels_for(csv_path=csv, bags=bags)
+        labels = labels_for(csv_paths=[csv], bags=bags)
     # a warning, not an error: stamps on another clock than the receive times may be right
     assert labels.onsets == {bags[0]: [1005.0], bags[1]: [5.0]}
     _csv(csv, 'a,1005.0,1005.1', 'b,2010.0,2010.1')
     with warnings.catch_warnings():
         warnings.simplefilter('error')
-        assert labels_for(csv_path=csv, bags=bags).onsets == {bags[0]: [1005.0],
-                                                              bags[1]: [2010.0]}
+        onsets = labels_for(csv_paths=[csv], bags=bags).onsets
+    assert onsets == {bags[0]: [1005.0], bags[1]: [2010.0]}
+
+
+def test_the_card_names_every_labels_csv_by_as_much_of_its_path_as_tells_them_apart(tmp_path):
+    user = [tmp_path / 'day1' / 'a', tmp_path / 'day2' / 'a', tmp_path / 'day2' / 'b']
+    csvs = [tmp_path / 'day1' / 'labels.csv', tmp_path / 'day2' / 'labels.csv']
+    sources = training_sources(user=user, csv_onsets={user[0]: [1.0], user[1]: [2.0, 3.0]},
+                               labels_paths=csvs, sim=None, sim_dir=None, kept=False,
+                               manifest={})
+    assert sources['recordings']['contacts'] == 4
+    assert sources['recordings']['labels'].startswith(
+        'day1/labels.csv, day2/labels.csv (--labels) for 2, the /contact_truth topic')
