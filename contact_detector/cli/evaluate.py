@@ -18,7 +18,7 @@
     contact-detector evaluate BAG_OR_DIR... [--detector forest|forest-both|forest-ft|threshold|
                               highpass|lowpass-bandpass|audio-onset|all ...] [--model M]
                               [--ft-model M]
-                              [--labels labels.csv] [--report DIR]
+                              [--labels labels.csv]... [--report DIR]
 
 Per trial: detected (first release within [onset - 10 ms, onset + 500 ms]), missed, late,
 premature (before the onset: the object is dropped), latency, and contact events blamed on
