@@ -46,6 +46,10 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 
 CLOCK_PERIOD_S = 0.01
+#: History depth of the /clock publisher, three times the data topics' 200: it sends a tick
+#: before the message of every topic and every CLOCK_PERIOD_S besides, so more messages than any
+#: one data topic (at --rate 4 with 100 Hz F/T and 16 kHz audio, about twice the F/T topic's).
+CLOCK_DEPTH = 600
 
 
 def import_message(msgtype: str):
@@ -121,9 +125,11 @@ class BagPlayer:
         if clock:
             from rosgraph_msgs.msg import Clock
             self._clock_msg = Clock
-            # Reliable with the data's depth: at --rate 4 a depth of 10 lost clock ticks when
-            # the subscriber fell behind for a moment.
-            self._clock_pub = node.create_publisher(Clock, '/clock', self._qos)
+            # Reliable, and deeper than the data topics: with their depth (200) /clock was the
+            # first history to overrun when a subscriber fell behind at --rate 4 on a loaded
+            # machine, and a tick was lost (a depth of 10 lost them at once).
+            self._clock_pub = node.create_publisher(Clock, '/clock', QoSProfile(
+                depth=CLOCK_DEPTH, reliability=ReliabilityPolicy.RELIABLE))
         self.published = 0
 
     def _publisher(self, record: Recorded):
