@@ -412,7 +412,6 @@ def labels_for(*, csv_paths: Sequence[Path], bags: Sequence[Path]) -> CsvLabels:
         raise BagError('no labels CSV given')
     named = ' and '.join(str(p) for p in csv_paths)
     onsets: Dict[Path, List[float]] = {}
-    skipped = set()
     source: Dict[Path, Path] = {}      # bag -> the CSV that names it
     for csv_path in csv_paths:
         rows = match_labels(rows=_onset_rows(path=csv_path), bags=bags, csv_path=csv_path)
@@ -424,8 +423,7 @@ def labels_for(*, csv_paths: Sequence[Path], bags: Sequence[Path]) -> CsvLabels:
                                'the rows of one CSV')
             source[bag] = csv_path
         onsets.update({bag: [onset for onset, _line in found] for bag, found in rows.items()})
-        skipped.update(without)
-    left_out = [b for b in bags if b not in onsets and b in skipped]
+    left_out = [b for b in bags if b in source and b not in onsets]   # rows with no onset
     kept = [b for b in bags if b not in left_out]
     if not kept:
         raise BagError(f'{named} {"gives" if len(csv_paths) == 1 else "give"} no onset for any '
